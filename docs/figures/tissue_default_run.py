@@ -64,7 +64,7 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--numen", default=os.path.join(ROOT, "build", "numen"))
     p.add_argument("--duration", type=float, default=10.0)
-    p.add_argument("--youngs-modulus-kpa", type=float, default=100.0)
+    p.add_argument("--youngs-modulus-kpa", type=float, default=120.0)
     p.add_argument("--poisson-ratio", type=float, default=0.45)
     p.add_argument("--density", type=float, default=1000.0)
     p.add_argument("--rayleigh-stiffness", type=float, default=0.001)

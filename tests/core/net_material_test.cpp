@@ -98,6 +98,7 @@ TEST(NetMaterial, EveryConstantFollowsFromTheMaterialAndTheTetrahedra) {
   // octahedron's faces are equilateral of side r√2), its normal outward, and the default patch
   // twice the edge of a 500-node net of the surface.
   EXPECT_NEAR(net.contact_modulus, t.youngs_modulus / (1.0 - t.poisson_ratio * t.poisson_ratio), 1e-9);
+  EXPECT_EQ(net.contact_poisson_ratio, t.poisson_ratio);
   const double face = std::sqrt(3.0) / 4.0 * 2.0 * r * r;
   ASSERT_EQ(net.surface_node_area.size(), 6u);
   ASSERT_EQ(net.surface_node_normal.size(), 6u);
@@ -229,6 +230,11 @@ TEST(NetMaterial, FinalizeRefusesAnInconsistentTissueNet) {
     core::Model m = good;
     m.nets[0].load_patch_radius = 0.0;
     EXPECT_NE(core::finalize_model(m).find("load_patch_radius > 0"), std::string::npos);
+  }
+  {
+    core::Model m = good;
+    m.nets[0].contact_poisson_ratio = 0.5;
+    EXPECT_NE(core::finalize_model(m).find("contact_poisson_ratio in (-1, 0.5)"), std::string::npos);
   }
   {
     core::Model m = good;

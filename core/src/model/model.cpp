@@ -64,12 +64,13 @@ std::string validate_nets(const Model& model) {
     }
     if (!(net.load_patch_radius >= 0.0 && std::isfinite(net.load_patch_radius)) ||
         !(net.contact_modulus >= 0.0 && std::isfinite(net.contact_modulus)) ||
+        !(net.contact_poisson_ratio > -1.0 && net.contact_poisson_ratio < 0.5) ||
         (net.contact_modulus > 0.0 &&
          (!(net.load_patch_radius > 0.0) ||
           static_cast<int>(net.surface_node_area.size()) > net.node_count ||
           net.surface_node_normal.size() != net.surface_node_area.size())))
       return who + ": contact_modulus needs load_patch_radius > 0 and at most node_count surface "
-                   "areas, one normal each";
+                   "areas, one normal each; contact_poisson_ratio in (-1, 0.5)";
     if (net.face_begin != next_face || net.face_count < 0)
       return who + ": face range must follow the previous net's";
     next_node += net.node_count;

@@ -199,6 +199,7 @@ double set_contact_constants(const TriangleMesh& surface, const MaterialNetSetti
                              double enclosed, NetModel& net) {
   const double nu = settings.tissue.poisson_ratio;
   net.contact_modulus = settings.tissue.youngs_modulus / (1.0 - nu * nu);
+  net.contact_poisson_ratio = nu;
   net.surface_node_area.assign(static_cast<std::size_t>(surface.num_vertices()), 0.0);
   net.surface_node_normal.assign(static_cast<std::size_t>(surface.num_vertices()), Vec3::Zero());
   double area = 0.0, edge_sum = 0.0;

@@ -45,7 +45,8 @@ TissueElastic tissue_elastic(const NetModel& net, double radius, bool primary, d
   TissueContactForce e;
   if (primary)
     e = tissue_contact_force(
-        make_tissue_contact_law(net.contact_modulus, radius, net.load_patch_radius, mp.stiffness),
+        make_tissue_contact_law(net.contact_modulus, net.contact_poisson_ratio, radius,
+                                net.load_patch_radius, mp.stiffness),
         depth);
   // The backstop, its onset smoothed over a quarter radius (contact_force.hpp's C¹ onset).
   MaterialPair onset = mp;
@@ -238,7 +239,8 @@ TissuePlane tissue_plane(const Model& model, Data& data, const NetModel& net, in
   out.force = e.force;
   out.stiffness = e.stiffness;
   const TissueContactLaw law =
-      make_tissue_contact_law(net.contact_modulus, radius, net.load_patch_radius, mp.stiffness);
+      make_tissue_contact_law(net.contact_modulus, net.contact_poisson_ratio, radius,
+                                net.load_patch_radius, mp.stiffness);
   out.patch_compliance = law.patch;
   const double d_ref = 0.01 * radius;
   out.secant_stiffness = tissue_contact_force(law, d_ref).force / d_ref;

@@ -166,10 +166,10 @@ StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h
                        const StabilityLimits& limits, double horizon,
                        const core::NetMaterial* material = nullptr);
 
-/// The shipped organ's material (docs/tissue.md, "The shipped organ keeps its feel"): E = 100 kPa,
+/// The shipped organ's material (docs/tissue.md, "The shipped organ keeps its feel"): E = 120 kPa,
 /// ν = 0.45, ρ = 1000 kg/m³, β = 1 ms, ℓ = 20 mm; "organ-plunge-material" gives it the organ of
 /// sim/scenes/default.toml.
-inline constexpr core::NetMaterial kShippedOrganMaterial{100e3, 0.45, 1000.0, 1e-3, 0.020};
+inline constexpr core::NetMaterial kShippedOrganMaterial{120e3, 0.45, 1000.0, 1e-3, 0.020};
 /// "scenes": every shipped scene (`scene_dir`/*.toml) through run_scene() with its contact
 /// stiffness and, separately, its coupling stiffness swept to 1e12 N/m
 /// (study_stability_scenes.cpp). A scene this build cannot load (NUMEN_WITH_* options) gets one
