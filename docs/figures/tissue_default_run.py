@@ -6,7 +6,7 @@ per-spring constants, runs it and the default scene with `numen run --json`, and
 side by side. The copy is removed afterwards.
 
     python3 docs/figures/tissue_default_run.py [--numen build/numen] [--duration 10]
-        [--youngs-modulus-kpa 100] [--poisson-ratio 0.45] [--density 1000]
+        [--youngs-modulus-kpa 120] [--poisson-ratio 0.45] [--density 1000]
         [--rayleigh-stiffness 0.001] [--support-length 0.02] [--nodes N]
 
 --nodes N gives the material organ a net of N surface nodes simplified from the organ's mesh
