@@ -46,8 +46,8 @@ inline double hertz_g(double x) noexcept { return 4.0 / 3.0 * x * std::sqrt(x); 
 
 /// g and dg/dx at the knot i.
 inline TissueHalfSpace at_knot(const TissueContactLaw& law, int i) noexcept {
-  return {kKnotConstants.hertz[i] * law.ratio[i],
-          2.0 * kKnotConstants.sqrt_x[i] * law.ratio[i] + kKnotConstants.hertz[i] * law.ratio_slope[i]};
+  const double r = law.ratio[i], dr = law.ratio_slope[i], h = kKnotConstants.hertz[i];
+  return {h * r, 2.0 * kKnotConstants.sqrt_x[i] * r + h * dr};
 }
 
 /// g and dg/dx at x ≥ 0 in segment `i`: −1 below the first knot, kKnots − 1 past the last,
@@ -68,8 +68,10 @@ TissueHalfSpace half_space_in(const TissueContactLaw& law, int i, double x) noex
     const double r0 = law.ratio[i], r1 = law.ratio[i + 1];
     const double m0 = law.ratio_slope[i] * h, m1 = law.ratio_slope[i + 1] * h;
     const double t2 = t * t, t3 = t2 * t;
-    r = (2 * t3 - 3 * t2 + 1) * r0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * r1 + (t3 - t2) * m1;
-    dr = ((6 * t2 - 6 * t) * r0 + (3 * t2 - 4 * t + 1) * m0 + (-6 * t2 + 6 * t) * r1 + (3 * t2 - 2 * t) * m1) / h;
+    r = (2 * t3 - 3 * t2 + 1) * r0 + (t3 - 2 * t2 + t) * m0 + (-2 * t3 + 3 * t2) * r1 +
+        (t3 - t2) * m1;
+    dr = ((6 * t2 - 6 * t) * r0 + (3 * t2 - 4 * t + 1) * m0 + (-6 * t2 + 6 * t) * r1 +
+          (3 * t2 - 2 * t) * m1) / h;
   }
   return {hertz_g(x) * r, 2.0 * std::sqrt(x) * r + hertz_g(x) * dr};
 }
@@ -130,23 +132,28 @@ TissueContactLaw make_tissue_contact_law(double contact_modulus, double poisson_
   int j = 0;
   while (j + 2 < kNeoHookeanSphereNus && nu > nus[j + 1]) ++j;
   const double w = (nu - nus[j]) / (nus[j + 1] - nus[j]);
-  for (int i = 0; i < kKnots; ++i)
-    law.ratio[i] = ((1.0 - w) * kNeoHookeanSphereG[j][i] + w * kNeoHookeanSphereG[j + 1][i]) / kKnotConstants.hertz[i];
+  for (int i = 0; i < kKnots; ++i) {
+    const double g = (1.0 - w) * kNeoHookeanSphereG[j][i] + w * kNeoHookeanSphereG[j + 1][i];
+    law.ratio[i] = g / kKnotConstants.hertz[i];
+  }
   // r' at the knots: the three-point derivative of the non-uniform knots, one-sided at the ends.
   const double* xs = kNeoHookeanSphereX;
   law.ratio_slope[0] = (law.ratio[1] - law.ratio[0]) / (xs[1] - xs[0]);
-  law.ratio_slope[kKnots - 1] = (law.ratio[kKnots - 1] - law.ratio[kKnots - 2]) / (xs[kKnots - 1] - xs[kKnots - 2]);
+  law.ratio_slope[kKnots - 1] =
+      (law.ratio[kKnots - 1] - law.ratio[kKnots - 2]) / (xs[kKnots - 1] - xs[kKnots - 2]);
   for (int i = 1; i + 1 < kKnots; ++i) {
     const double h0 = xs[i] - xs[i - 1], h1 = xs[i + 1] - xs[i];
-    const double s0 = (law.ratio[i] - law.ratio[i - 1]) / h0, s1 = (law.ratio[i + 1] - law.ratio[i]) / h1;
+    const double s0 = (law.ratio[i] - law.ratio[i - 1]) / h0;
+    const double s1 = (law.ratio[i + 1] - law.ratio[i]) / h1;
     law.ratio_slope[i] = (h1 * s0 + h0 * s1) / (h0 + h1);
   }
   // The switch: dd/dF = 1 / (E* R g'(x)) − c_ρ falls to 1/k where g' = 1 / (E* R (c_ρ + 1/k)).
-  const double x_s =
-      first_slope_at_least(law, 1.0 / (contact_modulus * sphere_radius * (law.patch + 1.0 / penalty)));
+  const double x_s = first_slope_at_least(
+      law, 1.0 / (contact_modulus * sphere_radius * (law.patch + 1.0 / penalty)));
   law.switch_x = x_s;
   if (x_s < HUGE_VAL) {
-    law.switch_force = contact_modulus * sphere_radius * sphere_radius * tissue_half_space(law, x_s).g;
+    law.switch_force =
+        contact_modulus * sphere_radius * sphere_radius * tissue_half_space(law, x_s).g;
     law.switch_depth = sphere_radius * x_s - law.patch * law.switch_force;
   } else {
     law.switch_force = HUGE_VAL;
@@ -205,7 +212,8 @@ TissueContactForce tissue_contact_force(const TissueContactLaw& law, double dept
     const double hi = std::min(xs[i], law.switch_x);
     const auto residual = [&](double v) {
       const TissueHalfSpace h = half_space_in(law, i - 1, v);
-      return std::pair{law.radius * v - law.patch * er2 * h.g - depth, law.radius - law.patch * er2 * h.slope};
+      return std::pair{law.radius * v - law.patch * er2 * h.g - depth,
+                       law.radius - law.patch * er2 * h.slope};
     };
     // Start where the chord between the knots' depths meets `depth` (below the first knot,
     // and at a switch between knots, from the lower bound).
