@@ -54,7 +54,10 @@ TEST(TissueContactLaw, TheHalfSpaceIsTheTablesAtItsKnotsAndRows) {
     const double g = tissue_half_space(mid, table::kNeoHookeanSphereX[i]).g;
     EXPECT_NEAR(g, 0.5 * (table::kNeoHookeanSphereG[3][i] + table::kNeoHookeanSphereG[4][i]), 1e-12 * g);
   }
-  // A ν outside the rows takes the nearest row.
+  // The rows' span, and a ν outside it takes the nearest row.
+  EXPECT_EQ(numen::core::tissue_law_poisson_range().min, table::kNeoHookeanSphereNu[0]);
+  EXPECT_EQ(numen::core::tissue_law_poisson_range().max,
+            table::kNeoHookeanSphereNu[table::kNeoHookeanSphereNus - 1]);
   const TissueContactLaw below = make_tissue_contact_law(kModulus, -0.5, kRadius, 0.009, kPenalty);
   const double first = table::kNeoHookeanSphereNu[0];
   EXPECT_DOUBLE_EQ(tissue_half_space(below, 1.0).g,

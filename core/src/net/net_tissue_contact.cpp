@@ -114,6 +114,10 @@ double first_slope_at_least(const TissueContactLaw& law, double slope) noexcept 
 
 }  // namespace
 
+TissueLawPoissonRange tissue_law_poisson_range() noexcept {
+  return {kNeoHookeanSphereNu[0], kNeoHookeanSphereNu[kNeoHookeanSphereNus - 1]};
+}
+
 TissueHalfSpace tissue_half_space(const TissueContactLaw& law, double x) noexcept {
   return half_space_in(law, segment_of(x), x);
 }

@@ -19,6 +19,7 @@
 #include "numen/core/net_material.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/net_surface_map.hpp"
+#include "numen/core/net_tissue_contact.hpp"
 #include "numen/sim/scene/mesh_cache.hpp"
 #include "numen/sim/study/study_common.hpp"  // thread_cpu_seconds()
 #include "scene_mesh.hpp"
@@ -407,6 +408,16 @@ void add_tissue_net(const TomlTable& t, core::Model& m, const core::TriangleMesh
             " m: the net resolves the patch poorly and the organ feels stiffer or softer than "
             "its material (docs/tissue.md, \"The contact\"); give it more nodes or a larger "
             "load_patch_radius"));
+  if (const core::TissueLawPoissonRange rows = core::tissue_law_poisson_range();
+      settings.tissue.poisson_ratio < rows.min)
+    warnings.push_back(mesh_warning(
+        t, "poisson_ratio", file,
+        "the contact law's neo-Hookean half-space is tabulated for Poisson's ratios " +
+            format_input_number(rows.min) + " to " + format_input_number(rows.max) + ": " +
+            format_input_number(settings.tissue.poisson_ratio) +
+            " takes the " + format_input_number(rows.min) +
+            " row under a tool's sphere (docs/tissue.md, \"The contact\"); the net's springs "
+            "and ties keep the material's"));
   if (m.integrator == core::Integrator::kSymplecticEuler && m.dt > c.explicit_step_limit)
     warnings.push_back(mesh_warning(
         t, "youngs_modulus_kpa", file,

@@ -407,6 +407,31 @@ TEST(SceneTissue, TheMultirateDeviceLoopFeelsAMaterialOrganAsTheSingleRateStepDo
 // A net coarser than its load patch is made for is warned at load (its mean edge above 0.6 ρ):
 // the shipped organ at 250 nodes, not at 500 (the default patch's design size), and not when
 // load_patch_radius is given large enough; the warning names the key that set ρ.
+// A Poisson's ratio below the contact law's table (its rows span 0.2 to 0.49) is warned at its
+// key: the half-space under a tool's sphere takes the first row.
+TEST(SceneTissue, APoissonsRatioBelowTheContactLawsTableIsWarned) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  TempDir dir;
+  const auto warned = [](const Scene& s) {
+    for (const std::string& w : s.warnings)
+      if (w.find("neo-Hookean half-space") != std::string::npos) return w;
+    return std::string();
+  };
+  const auto keys = [](const std::string& nu) {
+    return "mesh = \"file\"\nfile = \"" + shipped_organ_file() + "\"\nnodes = 500\n" +
+           "youngs_modulus_kpa = 100.0\npoisson_ratio = " + nu +
+           "\nsupport_length = 0.02\n";
+  };
+  EXPECT_EQ(warned(load_scene(dir.write("a.toml", bench_scene(keys("0.2"), 0.0025, 1e-3)))), "");
+  EXPECT_EQ(warned(load_scene(dir.write("b.toml", bench_scene(keys("0.499"), 0.0025, 1e-3)))), "");
+  const Scene low = load_scene(dir.write("c.toml", bench_scene(keys("0.1"), 0.0025, 1e-3)));
+  const std::string w = warned(low);
+  ASSERT_NE(w, "");
+  EXPECT_NE(w.find("deformable[0].poisson_ratio"), std::string::npos) << w;
+  EXPECT_NE(w.find("0.2 to 0.49"), std::string::npos) << w;
+  EXPECT_DOUBLE_EQ(low.model.nets[0].contact_poisson_ratio, 0.1);
+}
+
 TEST(SceneTissue, ANetCoarserThanItsLoadPatchIsWarned) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;

@@ -85,6 +85,14 @@ TissueContactLaw make_tissue_contact_law(double contact_modulus, double poisson_
                                          double sphere_radius, double patch_radius,
                                          double penalty) noexcept;
 
+/// The Poisson's ratios the contact law's half-space table spans: its first and last rows
+/// (0.2 and 0.49). A ν outside takes the nearest row; the scene loader warns below the first.
+struct TissueLawPoissonRange {
+  double min = 0.0;
+  double max = 0.0;
+};
+TissueLawPoissonRange tissue_law_poisson_range() noexcept;
+
 /// The half-space's g(x) = F / (E* R²) at x = δ_loc / R ≥ 0, and dg/dx.
 struct TissueHalfSpace {
   double g = 0.0;      ///< F / (E* R²).
