@@ -62,6 +62,13 @@ std::string organ_keys(const std::string& extra = "") {
          "rayleigh_stiffness = 0.001\nsupport_length = 0.02\n" + extra;
 }
 
+/// The first of `s`'s load warnings that contains `text` ("" when none does).
+std::string warning_containing(const Scene& s, const std::string& text) {
+  for (const std::string& w : s.warnings)
+    if (w.find(text) != std::string::npos) return w;
+  return std::string();
+}
+
 /// Volume (m³) enclosed by the closed, outward-wound surface of net 0 of `s` at rest.
 double enclosed_volume(const Scene& s) {
   const auto& m = s.model;
@@ -404,19 +411,12 @@ TEST(SceneTissue, TheMultirateDeviceLoopFeelsAMaterialOrganAsTheSingleRateStepDo
   EXPECT_TRUE(loaded.net_loads[0].material);
 }
 
-// A net coarser than its load patch is made for is warned at load (its mean edge above 0.6 ρ):
-// the shipped organ at 250 nodes, not at 500 (the default patch's design size), and not when
-// load_patch_radius is given large enough; the warning names the key that set ρ.
 // A Poisson's ratio below the contact law's table (its rows span 0.2 to 0.49) is warned at its
 // key: the half-space under a tool's sphere takes the first row.
 TEST(SceneTissue, APoissonsRatioBelowTheContactLawsTableIsWarned) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
-  const auto warned = [](const Scene& s) {
-    for (const std::string& w : s.warnings)
-      if (w.find("neo-Hookean half-space") != std::string::npos) return w;
-    return std::string();
-  };
+  const auto warned = [](const Scene& s) { return warning_containing(s, "neo-Hookean half-space"); };
   const auto keys = [](const std::string& nu) {
     return "mesh = \"file\"\nfile = \"" + shipped_organ_file() + "\"\nnodes = 500\n" +
            "youngs_modulus_kpa = 100.0\npoisson_ratio = " + nu +
@@ -432,14 +432,13 @@ TEST(SceneTissue, APoissonsRatioBelowTheContactLawsTableIsWarned) {
   EXPECT_DOUBLE_EQ(low.model.nets[0].contact_poisson_ratio, 0.1);
 }
 
+// A net coarser than its load patch is made for is warned at load (its mean edge above 0.6 ρ):
+// the shipped organ at 250 nodes, not at 500 (the default patch's design size), and not when
+// load_patch_radius is given large enough; the warning names the key that set ρ.
 TEST(SceneTissue, ANetCoarserThanItsLoadPatchIsWarned) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
-  const auto warned = [](const Scene& s) {
-    for (const std::string& w : s.warnings)
-      if (w.find("load patch radius") != std::string::npos) return w;
-    return std::string();
-  };
+  const auto warned = [](const Scene& s) { return warning_containing(s, "load patch radius"); };
   const Scene at_500 = load_scene(dir.write("a.toml", bench_scene(organ_keys("nodes = 500\n"), 0.0025, 1e-3)));
   EXPECT_EQ(warned(at_500), "");
   const Scene at_250 = load_scene(dir.write("b.toml", bench_scene(organ_keys("nodes = 250\n"), 0.0025, 1e-3)));
