@@ -181,7 +181,7 @@ TEST(StudyStability, ExtremeCasesImplicitStableAndLoopSafe) {
 // bound (at most 2.9-3.4 mm past the rest surface at 0.1 and 1 ms, ending held on the rigid core
 // 2.33 mm past it; 5.7-13.9 mm in the 10 ms transients against a bound of 62.6 mm;
 // docs/stability.md). Symplectic Euler diverges from rest at every one of
-// these steps, as the warning at load says (its limit with the material's damping is 2.3 µs).
+// these steps, as the warning at load says (its limit with the material's damping is 1.9 µs).
 TEST(StudyStability, TheOrganGivenItsMaterialStaysStableAt01To10msWithEachImplicitIntegrator) {
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();  // the organ scene's instrument
