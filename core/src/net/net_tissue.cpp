@@ -29,25 +29,27 @@ double true_radius(const Model& model, const NodeContact& ct) noexcept {
          model.bodies[static_cast<std::size_t>(ct.body_b)].sphere_margin;
 }
 
-/// The elastic part of a tissue contact on `net` (net_tissue_contact.hpp) for a sphere of
-/// `radius`, the pair `mp` (its stiffness already under the time-constant floor): at the sphere's
-/// deepest contact (`primary`, `depth` seen through the load patch) F(d) and its slope, and the
-/// backstop, the pair's penalty with a C¹ onset over r / 4 (kTissueBackstopOnset) on
-/// d_fine − 1.5 r once the touched fine surface is `fine_depth` > 1.5 r deep
-/// (kTissueBackstopDepth), along `normal`.
+/// The contact law (net_tissue_contact.hpp) of `net` for a sphere of `radius` and the pair `mp`
+/// (its stiffness already under the time-constant floor).
+TissueContactLaw tissue_law(const NetModel& net, double radius, const MaterialPair& mp) noexcept {
+  return make_tissue_contact_law(net.contact_modulus, net.contact_poisson_ratio, radius,
+                                 net.load_patch_radius, mp.stiffness);
+}
+
+/// The elastic part of a tissue contact for a sphere of `radius` and the pair `mp` (as
+/// tissue_law()): at the sphere's deepest contact (`law` given: the primary, `depth` seen
+/// through the load patch) F(d) and its slope, and the backstop, the pair's penalty with a C¹
+/// onset over r / 4 (kTissueBackstopOnset) on d_fine − 2 r once the touched fine surface is
+/// `fine_depth` > 2 r deep (kTissueBackstopDepth), along `normal`.
 struct TissueElastic {
   double force = 0.0;      ///< F(d) + the backstop (N).
   double stiffness = 0.0;  ///< Its slope (N/m).
   double patch = 0.0;      ///< F(d) alone: the part laid on the load patch (N).
 };
-TissueElastic tissue_elastic(const NetModel& net, double radius, bool primary, double depth,
+TissueElastic tissue_elastic(const TissueContactLaw* law, double radius, double depth,
                              double fine_depth, const Vec3& normal, const MaterialPair& mp) noexcept {
   TissueContactForce e;
-  if (primary)
-    e = tissue_contact_force(
-        make_tissue_contact_law(net.contact_modulus, net.contact_poisson_ratio, radius,
-                                net.load_patch_radius, mp.stiffness),
-        depth);
+  if (law) e = tissue_contact_force(*law, depth);
   // The backstop, its onset smoothed over a quarter radius (contact_force.hpp's C¹ onset).
   MaterialPair onset = mp;
   onset.onset_depth = kTissueBackstopOnset * radius;
@@ -154,8 +156,11 @@ const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
 ContactForceResult tissue_node_contact_force(const Model& model, const NetModel& net,
                                              const NodeContact& ct, double fine_depth, const Vec3& v_rel, const MaterialPair& mp,
                                         double& elastic, double& patch) noexcept {
+  const double radius = true_radius(model, ct);
+  TissueContactLaw law;
+  if (ct.primary) law = tissue_law(net, radius, mp);
   const TissueElastic e =
-      tissue_elastic(net, true_radius(model, ct), ct.primary, ct.depth, fine_depth, ct.normal, mp);
+      tissue_elastic(ct.primary ? &law : nullptr, radius, ct.depth, fine_depth, ct.normal, mp);
   elastic = e.force;
   patch = e.patch;
   ContactForceResult r;
@@ -234,13 +239,10 @@ TissuePlane tissue_plane(const Model& model, Data& data, const NetModel& net, in
                                                  model.solver.node_contact_max_omega_dt);
     mp.stiffness = std::min(mp.stiffness, limit);
   }
-  const TissueElastic e =
-      tissue_elastic(net, radius, true, out.depth, out.fine_depth, -out.normal, mp);
+  const TissueContactLaw law = tissue_law(net, radius, mp);
+  const TissueElastic e = tissue_elastic(&law, radius, out.depth, out.fine_depth, -out.normal, mp);
   out.force = e.force;
   out.stiffness = e.stiffness;
-  const TissueContactLaw law =
-      make_tissue_contact_law(net.contact_modulus, net.contact_poisson_ratio, radius,
-                                net.load_patch_radius, mp.stiffness);
   out.patch_compliance = law.patch;
   const double d_ref = 0.01 * radius;
   out.secant_stiffness = tissue_contact_force(law, d_ref).force / d_ref;
