@@ -117,6 +117,32 @@ TEST(TissueContactLaw, APatchTooSmallForTheSphereTurnsToThePenalty) {
   EXPECT_FALSE(std::isfinite(make_tissue_contact_law(kModulus, kNu, kRadius, 0.009, kPenalty).switch_depth));
 }
 
+// The touched point's blend (kTissueTouchDepthScale): a face contact's K(τ) is 0 where its point
+// is on an edge of its triangle (where a face contact appears or vanishes), 1 at its centroid,
+// increasing in between and flat at both ends; the depth factor is 1 at the deepest and e⁻¹ a
+// tenth of the radius less deep.
+TEST(TissueContactLaw, TheTouchedPointsBlendFadesAtATrianglesEdgesAndWithDepth) {
+  using numen::core::tissue_touch_depth_factor;
+  using numen::core::tissue_touch_fade;
+  using numen::core::Vec3;
+  EXPECT_EQ(tissue_touch_fade(Vec3(0.0, 0.5, 0.5)), 0.0);
+  EXPECT_EQ(tissue_touch_fade(Vec3(1.0, 0.0, 0.0)), 0.0);
+  EXPECT_DOUBLE_EQ(tissue_touch_fade(Vec3(1.0, 1.0, 1.0) / 3.0), 1.0);
+  double last = 0.0;
+  for (int i = 1; i <= 100; ++i) {  // from an edge's midpoint to the centroid
+    const double t = i / 100.0;
+    const Vec3 b = (1.0 - t) * Vec3(0.0, 0.5, 0.5) + t * Vec3(1.0, 1.0, 1.0) / 3.0;
+    const double k = tissue_touch_fade(b);
+    EXPECT_GT(k, last) << t;
+    last = k;
+  }
+  EXPECT_LT(tissue_touch_fade(Vec3(0.001, 0.4995, 0.4995)), 1e-4);  // C¹: flat at the edge
+  EXPECT_EQ(tissue_touch_depth_factor(0.0, kRadius), 1.0);
+  EXPECT_EQ(tissue_touch_depth_factor(-1e-6, kRadius), 1.0);
+  EXPECT_NEAR(tissue_touch_depth_factor(0.1 * kRadius, kRadius), std::exp(-1.0), 1e-12);
+  EXPECT_LT(tissue_touch_depth_factor(0.2 * kRadius, kRadius), tissue_touch_depth_factor(0.1 * kRadius, kRadius));
+}
+
 // The law is evaluated in the period: no allocation.
 TEST(TissueContactLaw, AllocatesNothing) {
   numen::test::AllocationGuard guard;

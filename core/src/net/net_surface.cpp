@@ -16,6 +16,7 @@
 #include "contact/collision_query.hpp"
 #include "scratch/data_scratch.hpp"
 #include "mesh/mesh_shape_query.hpp"
+#include "numen/core/net_tissue_contact.hpp"
 #include "scratch/net_scratch.hpp"
 #include "net/net_surface_frame.hpp"
 #include "numen/core/data.hpp"
@@ -99,18 +100,29 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       const int s = near[i];
       const Vec3& centre = sw[s];
       const double r = R[s];
-      // The sphere's deepest contact's entries in the sink (primary only).
+      // The sphere's deepest contact's entries in the sink (primary only), and where its
+      // entries begin.
+      const int sphere_begin = primary ? primary->count : 0;
       int deepest_begin = 0, deepest_end = 0;
       double deepest = -1.0;
+      // `fade`: the contact's K(τ) (a face's; 0 for an edge's or a vertex's).
       const auto emit = [&](int m, const Vec3& w, int body_, int sphere, int material_pair,
-                            const ContactGeometry& g, const Vec3& com_) {
+                            const ContactGeometry& g, const Vec3& com_, double fade) {
         const int before = primary ? primary->count : 0;
         emit_contact(m, w, body_, sphere, material_pair, g, com_);
-        if (primary && primary->count > before && g.depth > deepest)
-          deepest = g.depth, deepest_begin = before, deepest_end = primary->count;
+        if (!primary || primary->count <= before) return;
+        for (int k = before; k < primary->count; ++k) primary->out[k].blend = fade;
+        if (g.depth > deepest) deepest = g.depth, deepest_begin = before, deepest_end = primary->count;
       };
+      // The deepest's entries primary; each entry's weight in the touched point, its contact's
+      // K(τ) (written by emit) times its depth's factor (net_tissue_contact.hpp,
+      // kTissueTouchDepthScale).
       const auto mark = [&] {
         for (int k = deepest_begin; k < deepest_end; ++k) primary->out[k].primary = true;
+        for (int k = sphere_begin; k < primary->count; ++k) {
+          NodeContact& e = primary->out[k];
+          if (e.blend > 0.0) e.blend *= tissue_touch_depth_factor(deepest - e.depth, r);
+        }
       };
       // Every triangle whose closest point to the centre is inside it and within r is a
       // contact, along its own normal; the nearest point on an edge or a vertex is one more
@@ -139,7 +151,7 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
           g.depth = r - o.dot(centre - qm);
           g.normal = -o;
           g.position = 0.5 * (qm + centre - r * o);
-          emit(m, wm, body, s, mat_net + bm.material, g, com);
+          emit(m, wm, body, s, mat_net + bm.material, g, com, primary ? tissue_touch_fade(wm) : 0.0);
           face2 = std::min(face2, d2);
         } else if (d2 < best2) {
           best2 = d2;
@@ -185,7 +197,7 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       g.depth = r - (outside ? d : -d);
       g.normal = -o;
       g.position = 0.5 * (q + centre - r * o);
-      emit(best, w, body, s, mat_net + bm.material, g, com);
+      emit(best, w, body, s, mat_net + bm.material, g, com, 0.0);
       if (primary) mark();
     }
   }

@@ -16,6 +16,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/net_tissue_contact.hpp"
 
+#include "net/net_terms.hpp"
 #include "scratch/data_scratch.hpp"
 #include "scratch/net_scratch.hpp"
 
@@ -86,12 +87,15 @@ void find_patch(const Model& model, NetScratch& s, const NetModel& net, const Ve
 
 /// The plane of the primary tissue contact whose entries are data.node_contacts[first, last)
 /// (NodeContact::primary; net_tissue_contact.hpp): the patch about its material point
-/// p = Σ_e share_e r_e (rest positions of the entries' nodes) into NetScratch::patch_*, and the
-/// plane through the touched fine point moved by the patch's mean displacement ū instead of its
-/// own u = Σ_e share_e u_e, normal to the patch's mean rest normal (turned with the rigid
-/// component): its point, outward normal and the true sphere's depth into it. The entries'
-/// position was made with a sphere of `position_radius`. False (patch_count 0 where the entries
-/// have no share) for a patch without a node or a normal.
+/// p = Σ_e w_e r_e / Σ_e w_e (rest positions of the entries' nodes) into NetScratch::patch_*, and
+/// the plane through the touched fine point q̄ = Σ_e w_e q_e / Σ_e w_e moved by the patch's mean
+/// displacement ū instead of its own u = Σ_e w_e u_e / Σ_e w_e, normal to the patch's mean rest
+/// normal (turned with the rigid component): its point, outward normal and the true sphere's
+/// depth into it. w_e = blend_e share_e over the entries of the sphere's contacts with this net
+/// about [first, last) (NodeContact::blend, kTissueTouchDepthScale's; the primary's entries have
+/// kTissueTouchFloor more). The entries' position was made with a sphere of `position_radius`. False
+/// (patch_count 0 where the primary's entries have no share) for a patch without a node or a
+/// normal.
 struct PatchPlane {
   Vec3 touched, outward;
   double depth;
@@ -104,21 +108,44 @@ bool patch_plane(const Model& model, const Data& data, NetScratch& s, const NetM
     const auto i = static_cast<std::size_t>(v);
     return data.nodes[i].position - (body.position + rot * model.node_rest[i]);
   };
-  Vec3 p = Vec3::Zero(), own = Vec3::Zero();
-  double shares = 0.0;
-  for (int c = first; c < last; ++c) {
+  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
+  const BodyState& tool = data.bodies[static_cast<std::size_t>(ct.body_b)];
+  const Sphere& sphere = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)];
+  const Vec3 centre = tool.position + tool.orientation * sphere.center;
+  // The sphere's entries on this net about the primary's (written together by the collision
+  // stage, net_surface.cpp).
+  const int n = node_contact_count(data);
+  const auto same_sphere = [&](int c) {
     const NodeContact& e = data.node_contacts[static_cast<std::size_t>(c)];
-    p += e.share * model.node_rest[static_cast<std::size_t>(e.node)];
-    own += e.share * move(e.node);
-    shares += e.share;
+    return !e.held && e.body_b == ct.body_b && e.sphere_b == ct.sphere_b && e.node >= net.node_begin &&
+           e.node < net.node_begin + net.node_count;
+  };
+  int lo = first, hi = last;
+  while (lo > 0 && same_sphere(lo - 1)) --lo;
+  while (hi < n && same_sphere(hi)) ++hi;
+  Vec3 p = Vec3::Zero(), own = Vec3::Zero(), fine = Vec3::Zero();
+  double weights = 0.0, shares = 0.0;
+  for (int c = lo; c < hi; ++c) {
+    const NodeContact& e = data.node_contacts[static_cast<std::size_t>(c)];
+    const bool in_primary = c >= first && c < last;
+    const double w = (e.blend + (in_primary ? kTissueTouchFloor : 0.0)) * e.share;
+    if (in_primary) shares += e.share;
+    if (!(w > 0.0)) continue;
+    p += w * model.node_rest[static_cast<std::size_t>(e.node)];
+    own += w * move(e.node);
+    // The touched fine point (NodeContact::position is ½ (q + c − r o), o = −normal, r the
+    // radius the contact was made with).
+    fine += w * (2.0 * e.position - centre - position_radius * e.normal);
+    weights += w;
   }
-  if (!(shares > 0.0)) {  // no patch: the force stays on the entries' nodes (lay_on_patch())
+  if (!(shares > 0.0) || !(weights > 0.0)) {  // no patch: the force stays on the entries' nodes (lay_on_patch())
     s.patch_count = 0;
     s.patch_net = -1;
     return false;
   }
-  p /= shares;
-  own /= shares;
+  p /= weights;
+  own /= weights;
+  fine /= weights;
   find_patch(model, s, net, p);
   if (s.patch_count == 0) return false;
   Vec3 mean = Vec3::Zero(), normal = Vec3::Zero();
@@ -131,14 +158,8 @@ bool patch_plane(const Model& model, const Data& data, NetScratch& s, const NetM
   const double len = normal.norm();
   if (!(len > 0.0)) return false;
   out.outward = rot * (normal / len);
-  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(first)];
-  const BodyState& tool = data.bodies[static_cast<std::size_t>(ct.body_b)];
-  const Sphere& sphere = model.body_spheres[static_cast<std::size_t>(ct.sphere_b)];
-  const Vec3 centre = tool.position + tool.orientation * sphere.center;
   const double radius = true_radius(model, ct);
-  // The touched point (NodeContact::position is ½ (q + c − r o), o = −normal, r the radius the
-  // contact was made with), moved by ū − u.
-  out.touched = 2.0 * ct.position - centre - position_radius * ct.normal + (mean - own);
+  out.touched = fine + (mean - own);  // the touched point moved by ū − u
   out.depth = radius - (centre - out.touched).dot(out.outward);
   return true;
 }

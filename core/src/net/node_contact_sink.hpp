@@ -130,6 +130,7 @@ struct NodeContactSink {
     c.active = false;
     c.engaged = false;
     c.primary = false;
+    c.blend = 0.0;
     c.weight_normal = 0.0;
     c.weight_isotropic = 0.0;
     c.face = -1;

@@ -104,9 +104,10 @@ void tissue_write_mesh(int f, bool ellipsoid, const std::string& path) {
 /// ℓ = 20 mm) on nets of 500, 1 000, 2 500, 5 000 and 10 000 nodes carrying the 10 242-vertex
 /// mesh, dt = 1 ms: each net's largest difference of the 5 ms means from the finest's, over the
 /// finest's peak, and its largest period-to-period change. Checked: every net within 5 % of the
-/// finest's peak (issue 67), and no net's largest period-to-period change above the larger of
-/// the finest's and 0.05 N (2.5 times what the curve's steepest slope, about 1 N/mm, gives in one
-/// period of 0.02 mm; the issue asks the finest's: docs/tissue.md says where a net passes it).
+/// finest's peak (issue 67), and no net's largest period-to-period change more than 10 % above
+/// the finest's (each net's largest change is its curve's steepest slope over one period, about
+/// 0.5 N/mm at 20 µm, and curves within 5 % of each other's peak differ more in their slope;
+/// measured up to 5.0 % above, docs/tissue.md; a jump of the touched point was 3 times it).
 void tissue_convergence(const char* label, bool ellipsoid, const Vec3& from) {
   TempDir dir;
   const std::string obj = (dir.path() / "organ.obj").string();
@@ -150,11 +151,10 @@ void tissue_convergence(const char* label, bool ellipsoid, const Vec3& from) {
     std::printf("[tissue figure 1] %s, %d nodes: largest difference from 10 000 nodes %.4f N = %.1f %% "
                 "of its peak %.3f N (at %.2f mm); to 5.5 mm %.1f %%\n",
                 label, sizes[k], worst, 100.0 * worst / peak, peak, 1e3 * at, 100.0 * worst_55 / peak);
-    if (jumps[k] > jumps.back())
-      std::printf("[tissue figure 1] %s, %d nodes: its largest period-to-period change %.4f N is above "
-                  "the finest's %.4f N\n", label, sizes[k], jumps[k], jumps.back());
+    std::printf("[tissue figure 1] %s, %d nodes: its largest period-to-period change %.4f N is %.3f "
+                "times the finest's %.4f N\n", label, sizes[k], jumps[k], jumps[k] / jumps.back(), jumps.back());
     EXPECT_LE(worst, 0.05 * peak) << label << ", " << sizes[k] << " nodes";
-    EXPECT_LE(jumps[k], std::max(jumps.back() * 1.0001, 0.05)) << label << ", " << sizes[k] << " nodes";
+    EXPECT_LE(jumps[k], 1.10 * jumps.back()) << label << ", " << sizes[k] << " nodes";
   }
 }
 
@@ -283,3 +283,4 @@ TEST(TissueFigures, TheShippedOrganWithItsMaterialKeepsItsFeel) {
     }
   }
 }
+

@@ -63,6 +63,11 @@ struct NodeContact {
   /// with its load patch; the sphere's other contacts act only past the law's switch depth, by
   /// the penalty (the net then carries the sphere itself). Set by detect_node_contacts().
   bool primary = false;
+  /// An organ given by its material: this entry's contact's weight in where its sphere's
+  /// two-scale law touches the organ (net_tissue_contact.hpp, kTissueTouchDepthScale): K(τ)
+  /// exp((d − d_max) / (0.1 R)), 0 for an edge's or a vertex's contact; 0 elsewhere. Set by
+  /// detect_node_contacts().
+  double blend = 0.0;
   /// k_eff (N/m): the material pair's stiffness, clamped by the contact time-constant floor
   /// (SolverSettings::node_contact_max_omega_dt) on the node's mass and the body's effective mass.
   /// When active: the law's ∂f_n/∂d (contact_penalty_force(): k_eff for the linear law), the

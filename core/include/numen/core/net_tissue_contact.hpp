@@ -35,6 +35,11 @@
 ///
 /// Real-time safe: no allocation, no exception.
 
+#include <algorithm>
+#include <cmath>
+
+#include "numen/core/types.hpp"
+
 namespace numen::core {
 
 /// The half-space's displacement under a force F spread by the kernel over a disc of radius ρ
@@ -71,6 +76,36 @@ struct TissueContactLaw {
 /// half-space table's last knot, x = 2 (a sphere sunk 1.5 R, as a Hertzian law once allowed,
 /// is within the neo-Hookean law's range on the organs of docs/tissue.md at 6 mm).
 inline constexpr double kTissueBackstopDepth = 2.0;
+
+/// Where a sphere's two-scale law touches an organ given by its material: not at its deepest
+/// contact alone but at a blend of its contacts with the organ (NodeContact::blend), each
+/// weighted w = K(τ) exp((d − d_max) / (kTissueTouchDepthScale R)): d its depth, d_max the
+/// deepest's, τ = 3 min(b) from the barycentric weights b of its point on its triangle
+/// (tissue_touch_fade(): 0 on the triangle's edges, where a face contact appears and vanishes,
+/// 1 at its centroid; an edge's or a vertex's contact weighs 0). Where the fine surface wraps a
+/// deep sphere, its few face contacts are up to a millimetre apart and the deepest vanishes
+/// when its point leaves its triangle: the deepest alone moved the touched point by that
+/// distance in one period (docs/tissue.md's organs: 0.03 N a period), the blend moves it
+/// continuously. The deepest contact keeps kTissueTouchFloor of weight, so that a sphere on an
+/// edge or a vertex alone still touches there.
+inline constexpr double kTissueTouchDepthScale = 0.1;
+
+/// The deepest contact's own weight in the blend (see kTissueTouchDepthScale).
+inline constexpr double kTissueTouchFloor = 1e-3;
+
+/// K(τ) of kTissueTouchDepthScale's blend for a face contact at the barycentric weights `b` of
+/// its triangle: the smoothstep s² (3 − 2 s) of s = min(1, 3 min(b)).
+inline double tissue_touch_fade(const Vec3& b) noexcept {
+  const double s = std::clamp(3.0 * b.minCoeff(), 0.0, 1.0);
+  return s * s * (3.0 - 2.0 * s);
+}
+
+/// The depth factor exp((d − d_max) / (kTissueTouchDepthScale R)) of kTissueTouchDepthScale's
+/// blend for a contact `below` = d_max − d (m, ≥ 0) less deep than its sphere's deepest, for a
+/// sphere of `radius` R (m, > 0).
+inline double tissue_touch_depth_factor(double below, double radius) noexcept {
+  return std::exp(-std::max(0.0, below) / (kTissueTouchDepthScale * radius));
+}
 
 /// The backstop's onset, in sphere radii: the pair's penalty joins over it with contact_force.hpp's
 /// C¹ quadratic onset (MaterialPair::onset_depth), so that it never steps the force.
