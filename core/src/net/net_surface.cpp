@@ -119,9 +119,12 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       // kTissueTouchDepthScale).
       const auto mark = [&] {
         for (int k = deepest_begin; k < deepest_end; ++k) primary->out[k].primary = true;
+        double at = -1.0, factor = 0.0;  // a contact's entries share its depth: one exp a contact
         for (int k = sphere_begin; k < primary->count; ++k) {
           NodeContact& e = primary->out[k];
-          if (e.blend > 0.0) e.blend *= tissue_touch_depth_factor(deepest - e.depth, r);
+          if (!(e.blend > 0.0)) continue;
+          if (e.depth != at) at = e.depth, factor = tissue_touch_depth_factor(deepest - at, r);
+          e.blend *= factor;
         }
       };
       // Every triangle whose closest point to the centre is inside it and within r is a
