@@ -283,4 +283,3 @@ TEST(TissueFigures, TheShippedOrganWithItsMaterialKeepsItsFeel) {
     }
   }
 }
-
