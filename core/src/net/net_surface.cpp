@@ -116,14 +116,18 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       };
       // The deepest's entries primary; each entry's weight in the touched point, its contact's
       // K(τ) (written by emit) times its depth's factor (net_tissue_contact.hpp,
-      // kTissueTouchDepthScale).
+      // kTissueTouchDepthScale), both for the true sphere (a multirate scene loop grows it by
+      // BodyModel::sphere_margin: a contact the true sphere does not reach weighs 0, as after
+      // the loop cuts its contacts back to it).
       const auto mark = [&] {
         for (int k = deepest_begin; k < deepest_end; ++k) primary->out[k].primary = true;
+        const double margin = bm.sphere_margin;
         double at = -1.0, factor = 0.0;  // a contact's entries share its depth: one exp a contact
         for (int k = sphere_begin; k < primary->count; ++k) {
           NodeContact& e = primary->out[k];
           if (!(e.blend > 0.0)) continue;
-          if (e.depth != at) at = e.depth, factor = tissue_touch_depth_factor(deepest - at, r);
+          if (e.depth != at)
+            at = e.depth, factor = at > margin ? tissue_touch_depth_factor(deepest - at, r - margin) : 0.0;
           e.blend *= factor;
         }
       };

@@ -87,7 +87,8 @@ inline constexpr double kTissueBackstopDepth = 2.0;
 /// when its point leaves its triangle: the deepest alone moved the touched point by that
 /// distance in one period (docs/tissue.md's organs: 0.03 N a period), the blend moves it
 /// continuously. The deepest contact keeps kTissueTouchFloor of weight, so that a sphere on an
-/// edge or a vertex alone still touches there.
+/// edge or a vertex alone still touches there. R and d are the true sphere's where a multirate
+/// scene loop grows it (BodyModel::sphere_margin): a contact it does not reach weighs 0.
 inline constexpr double kTissueTouchDepthScale = 0.1;
 
 /// The deepest contact's own weight in the blend (see kTissueTouchDepthScale).
