@@ -138,7 +138,8 @@ bool patch_plane(const Model& model, const Data& data, NetScratch& s, const NetM
     fine += w * (2.0 * e.position - centre - position_radius * e.normal);
     weights += w;
   }
-  if (!(shares > 0.0) || !(weights > 0.0)) {  // no patch: the force stays on the entries' nodes (lay_on_patch())
+  // (weights ≥ kTissueTouchFloor · shares: positive with the primary's shares)
+  if (!(shares > 0.0)) {  // no patch: the force stays on the entries' nodes (lay_on_patch())
     s.patch_count = 0;
     s.patch_net = -1;
     return false;
