@@ -127,6 +127,24 @@ TEST(DcfConfiguration, PdoSequenceOfCia301ThenObjectsThenReadBack) {
   EXPECT_EQ(plan.steps().back().address, (SdoAddress{0x6072, 0}));
 }
 
+TEST(DcfConfiguration, AMappingCountOfAStringTypeIsRefusedAtItsEntry) {
+  // A fuzz finding: mapping entries configured under a count that is a VISIBLE_STRING gave
+  // SDO steps of 0 bytes. The count is UNSIGNED8 (CiA 301); a non-numeric one is refused.
+  const std::string text = replaced(
+      shipped_text("trocar_drive.dcf"),
+      "[1A00sub0]\nParameterName=Number of mapped objects\nObjectType=0x7\nDataType=0x0005",
+      "[1A00sub0]\nParameterName=Number of mapped objects\nObjectType=0x7\nDataType=0x0009");
+  try {
+    const DcfConfiguration plan(dcf(text, 1));
+    FAIL() << "accepted";
+  } catch (const numen::hal::DcfError& e) {
+    EXPECT_EQ(e.location().section, "1A00sub0");
+    EXPECT_NE(std::string(e.what()).find("the mapping count [1A00sub0] has DataType 0x0009, not a numeric one"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(DcfConfiguration, ShippedDcfWrittenAndReadBackWithoutAllocating) {
   Node n;
   const DcfConfiguration plan(dcf(shipped_text("trocar_drive.dcf"), 1));

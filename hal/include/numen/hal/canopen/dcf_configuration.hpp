@@ -47,7 +47,9 @@ struct ConfigurationStep {
 /// The SDO transfers configuring one node from `dcf` (see the file comment). Setup code.
 class DcfConfiguration {
  public:
-  /// Builds the steps of `dcf` (not null).
+  /// Builds the steps of `dcf` (not null). Throws DcfError (located at the entry) for a PDO
+  /// whose mapping entries are configured without a mapping count ([16xx/1Axx sub0]) or with
+  /// one of a string or DOMAIN type, which no SDO step can write.
   explicit DcfConfiguration(std::shared_ptr<const Dcf> dcf);
 
   /// The steps, in order: writes, then verifications.
