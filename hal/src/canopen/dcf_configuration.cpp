@@ -89,8 +89,8 @@ DcfConfiguration::DcfConfiguration(std::shared_ptr<const Dcf> dcf) : dcf_(std::m
       const auto c = static_cast<std::size_t>(count);
       if (data_type_size(entries[c].data_type) == 0) {
         throw DcfError(entries[c].location,
-                       "the mapping count [" + hex_of_size(map, 2).substr(2) + "sub0] has DataType " +
-                           hex_of_size(entries[c].data_type, 2) +
+                       "the mapping count [" + hex_of_size(map, 2).substr(2) +
+                           "sub0] has DataType " + hex_of_size(entries[c].data_type, 2) +
                            ", not a numeric one (CiA 301: UNSIGNED8)");
       }
       step(ConfigurationStep::Kind::kWrite, c, 0);

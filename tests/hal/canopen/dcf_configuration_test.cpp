@@ -139,9 +139,8 @@ TEST(DcfConfiguration, AMappingCountOfAStringTypeIsRefusedAtItsEntry) {
     FAIL() << "accepted";
   } catch (const numen::hal::DcfError& e) {
     EXPECT_EQ(e.location().section, "1A00sub0");
-    EXPECT_NE(std::string(e.what()).find("the mapping count [1A00sub0] has DataType 0x0009, not a numeric one"),
-              std::string::npos)
-        << e.what();
+    const std::string expected = "the mapping count [1A00sub0] has DataType 0x0009, not a numeric one";
+    EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
   }
 }
 
