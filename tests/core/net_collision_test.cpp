@@ -431,6 +431,54 @@ TEST(NetCollision, NodeAgainstAnotherBodysSpheres) {
   EXPECT_EQ(d.nets[0].max_penetration, 0.0);
 }
 
+// The contacts' buffer is shared: the held springs (a grasp's, a needle's puncture ties, a
+// thread's eyelets on tissue: NodeContact::held) go after the node contacts, so a later step's
+// contact lands in a slot an earlier step's spring filled. It is a penalty contact all the same,
+// every field as in a fresh buffer: a stale `held` made it a spring of no force that the tool
+// went through (the suturing scene's needle tunnelled into its pad, docs/suturing.md).
+TEST(NetCollision, AContactInASlotAnEarlierHeldSpringFilledIsAPenaltyContact) {
+  Model m = net_model_base(3);
+  add_icosphere_net(m, 0.05, 1, 2, 0.01);  // 42 nodes
+  add_sphere_body(m, Vec3(0.07, 0, 0), {{Vec3(0, 0, 0), 0.015}}, 1);
+  finalize(m);
+  Data fresh = make_data(m);
+  Data reused = make_data(m);
+  for (NodeContact& c : reused.node_contacts) {  // an earlier step's springs everywhere
+    c.held = true;
+    c.active = true;
+    c.engaged = true;
+    c.primary = true;
+    c.blend = 0.5;
+    c.stiffness = 1000.0;
+    c.damping = 1.0;
+    c.friction = 2.0;
+    c.weight_normal = 3.0;
+    c.weight_isotropic = 4.0;
+    c.force = Vec3(1, 2, 3);
+    c.normal_velocity = 0.1;
+  }
+  for (Data* d : {&fresh, &reused}) {
+    detect_contacts(m, *d);
+    detect_node_contacts(m, *d);
+  }
+  ASSERT_GT(fresh.num_node_contacts, 0);
+  ASSERT_EQ(reused.num_node_contacts, fresh.num_node_contacts);
+  for (int k = 0; k < fresh.num_node_contacts; ++k) {
+    const NodeContact& a = reused.node_contacts[static_cast<std::size_t>(k)];
+    const NodeContact& b = fresh.node_contacts[static_cast<std::size_t>(k)];
+    EXPECT_FALSE(a.held) << "contact " << k << ": a penalty contact, not a spring";
+    EXPECT_EQ(std::tie(a.active, a.engaged, a.primary, a.node, a.body_b, a.sphere_b, a.face),
+              std::tie(b.active, b.engaged, b.primary, b.node, b.body_b, b.sphere_b, b.face))
+        << "contact " << k;
+    EXPECT_EQ(std::tie(a.blend, a.stiffness, a.damping, a.friction, a.weight_normal, a.weight_isotropic,
+                       a.normal_velocity, a.depth, a.share),
+              std::tie(b.blend, b.stiffness, b.damping, b.friction, b.weight_normal, b.weight_isotropic,
+                       b.normal_velocity, b.depth, b.share))
+        << "contact " << k;
+    EXPECT_EQ(a.force, b.force) << "contact " << k;
+  }
+}
+
 TEST(NetCollision, IgnoresItsRigidComponentAndItsArticulation) {
   NUMEN_REQUIRE_ARTICULATION();
   Model m = net_model_base(1);

@@ -108,7 +108,11 @@ void sweep_tip(const Model& model, Data& data, const NeedleModel& n, NeedleState
     const NeedlePuncture& entry = st.punctures[0];
     const int f = first_crossing(model, data, entry.net, a, tip, &w);
     if (f < 0 || face_normal(model, data, f).dot(tip - a) <= 0.0) return;  // not out
-    if ((tip - a).dot(tangent) > 0.0) {  // out going forward: the exit
+    // Drawn back out the way it came only while the tip is within 4 r_w of the entry along the
+    // arc; deeper in, the tip comes out through new tissue whichever way it moved this step (the
+    // surface moves too: a dragged pad can pass a still tip), which is an exit.
+    const bool at_entry = entry.arc_parameter >= n.length() - 4.0 * n.wire_radius;
+    if (!at_entry || (tip - a).dot(tangent) > 0.0) {  // out through new tissue: the exit
       NeedlePuncture& x = st.punctures[static_cast<std::size_t>(st.num_punctures++)];
       x = NeedlePuncture{};
       x.net = entry.net;

@@ -113,6 +113,7 @@ struct NodeContactSink {
   NodeContact& write(int node, int body_b, int obstacle, int sphere_b, int material_pair,
                      const ContactGeometry& g, const Vec3& com_b) noexcept {
     NodeContact& c = out[count++];
+    c = NodeContact{};  // the slot may hold a held spring or a law's coefficients of an earlier step
     c.node = node;
     c.body_b = body_b;
     c.obstacle = obstacle;
@@ -121,21 +122,7 @@ struct NodeContactSink {
     c.position = g.position;
     c.normal = g.normal;
     c.depth = g.depth;
-    c.force.setZero();
-    if (body_b >= 0)
-      c.r_b = g.position - com_b;
-    else
-      c.r_b.setZero();
-    c.normal_velocity = 0.0;
-    c.active = false;
-    c.engaged = false;
-    c.primary = false;
-    c.blend = 0.0;
-    c.weight_normal = 0.0;
-    c.weight_isotropic = 0.0;
-    c.face = -1;
-    c.face_weights.setZero();
-    c.share = 1.0;
+    if (body_b >= 0) c.r_b = g.position - com_b;
     return c;
   }
 };

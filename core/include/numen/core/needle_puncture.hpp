@@ -88,12 +88,13 @@ struct NeedleState {
 
 /// The needle's ties, before the forces (step(), after the grasp stage; kStageNeedles): for each
 /// needle, sweeps its tip from its last place through the punctured net's triangles (an exit
-/// point where it comes out going forward; every point let go where it comes out going back, or a
-/// tunnel counted where it goes in without a puncture), lets go the points past the arc's ends,
-/// drops this step's node contacts of its spheres inside the net (those between the entry's and
-/// the exit's arc parameters, ± 2 r_w), keeps the points let go past the tail in
-/// NeedleState::tail_releases, and writes each point's springs after the node contacts
-/// and the grasp springs (Data::num_node_needle_ties). No allocation.
+/// point where it comes out going forward, or anyhow more than 4 r_w along the arc past the entry;
+/// every point let go where it comes out going back within 4 r_w of the entry: drawn back out the
+/// way it came; a tunnel counted where it goes in without a puncture), lets go the points past the
+/// arc's ends, drops this step's node contacts of its spheres inside the net (those between the
+/// entry's and the exit's arc parameters, ± 2 r_w), keeps the points let go past the tail in
+/// NeedleState::tail_releases, and writes each point's springs after the node contacts and the
+/// grasp springs (Data::num_node_needle_ties). No allocation.
 void tie_needles(const Model& model, Data& data) noexcept;
 
 /// The puncture test, after the forces (step(); kStageNeedles): for each needle with a puncture
