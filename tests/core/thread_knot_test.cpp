@@ -17,6 +17,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 #include "numen/core/thread.hpp"
+#include "sanitizer.hpp"
 
 namespace numen {
 namespace {
@@ -236,10 +237,12 @@ KnotPull pull_knot(bool self_contact, double self_stiffness, double drag, double
   return out;
 }
 
-// The invariant itself: the laid knot is a trefoil (3) in every view, the same thread laid
-// straight no knot (1).
+// The invariant itself: the laid knot (its first 300 chords of 0.25 mm, the tail it ends on cut
+// short) is a trefoil (3) in every view; a straight thread, and a loop that crosses itself once,
+// no knot (1).
 TEST(ThreadKnot, TheKnotDeterminantTellsAKnotFromNone) {
-  const std::vector<Vec3> line = open_overhand_knot(1.5e-3, 20e-3);
+  const std::vector<Vec3> line = nodes_along(open_overhand_knot(1.5e-3, 20e-3), 0.25e-3, 300);
+  ASSERT_EQ(line.size(), 301u);
   for (int v = 0; v < 3; ++v) EXPECT_EQ(knot_determinant(line, 0.7 * v), 3) << "view " << v;
   std::vector<Vec3> straight;
   for (int i = 0; i <= 100; ++i) straight.push_back(Vec3(1e-3 * i, 0.0, 0.0));
@@ -261,6 +264,9 @@ TEST(ThreadKnot, TheKnotDeterminantTellsAKnotFromNone) {
 // thread's drag 100 N·s/m², an overdamped thread: at a drag of 3 N·s/m² and below the slack,
 // light thread's Newton iteration does not converge and the knot comes apart or breaks.
 TEST(ThreadKnot, AnOverhandKnotPulledTightHoldsTwoNewtons) {
+  NUMEN_SKIP_UNDER_SANITIZER(
+      "pulls a 313-segment knot through 4 s of simulated time, a figure of the thread's solve, not "
+      "what a sanitizer checks; the self contact's path runs there in Thread.SelfContactKeepsStrandsApart");
   const KnotPull r = pull_knot(true, 1e5, 100.0, 2.0, 2.0);
   for (int v = 0; v < 3; ++v) {
     EXPECT_EQ(r.determinant_at_start[v], 3) << "view " << v;
@@ -283,6 +289,7 @@ TEST(ThreadKnot, AnOverhandKnotPulledTightHoldsTwoNewtons) {
 // The same pull without self contact, and with the material's default stiffness (1e4 N/m): the
 // strands pass through each other and the knot comes undone (determinant 1).
 TEST(ThreadKnot, WithoutAStiffSelfContactTheKnotComesUndone) {
+  NUMEN_SKIP_UNDER_SANITIZER("two pulls of the knot as above, figures of the thread's solve");
   for (const auto& [self, stiffness] : {std::pair{false, 1e5}, std::pair{true, 1e4}}) {
     const KnotPull r = pull_knot(self, stiffness, 100.0, 2.0, 0.5);
     for (int v = 0; v < 3; ++v) EXPECT_EQ(r.determinant_at_end[v], 1) << "self contact " << self << ", k " << stiffness;
