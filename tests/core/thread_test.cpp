@@ -41,6 +41,7 @@ TEST(Thread, RefusesBadSettingsByName) {
       {"density", [](core::ThreadModel& t) { t.density = 0.0; }},
       {"damping", [](core::ThreadModel& t) { t.damping = -1e-3; }},
       {"break_strain", [](core::ThreadModel& t) { t.break_strain = 0.0; }},
+      {"self_friction", [](core::ThreadModel& t) { t.self_friction = -0.1; }},
       {"tie_end.body", [](core::ThreadModel& t) { t.tie_end.body = 3; }},
   };
   for (const Case& c : cases) {
@@ -394,10 +395,11 @@ TEST(Thread, ANonFiniteStepIsRolledBackAndCounted) {
 }
 
 // Stepping a thread with a tie to a body, contacts with a sphere and an obstacle, an eyelet
-// and self contact allocates nothing.
+// and self contact with friction allocates nothing.
 TEST(Thread, StepsWithoutAllocating) {
   core::ThreadModel t;
   t.segments = 200;
+  t.self_friction = 0.3;
   core::Model m = test::thread_model(t, [&](core::Model& mm) {
     mm.gravity = Vec3(0.0, 0.0, -9.81);
     const int b = test::add_thread_test_body(mm, 0.05, 1e-5, Vec3(0.05, 0.0, -0.0026), 2.5e-3);

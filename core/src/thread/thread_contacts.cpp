@@ -225,8 +225,8 @@ void find_thread_self_pairs(const ThreadModel& thread, ThreadState& st,
 }
 
 int add_thread_self_contacts(const Model& model, const ThreadModel& thread,
-                             const std::vector<Vec3>& x, const ThreadScratch& scratch, double h,
-                             ThreadBand& band) noexcept {
+                             const std::vector<Vec3>& x, const std::vector<Vec3>& v,
+                             const ThreadScratch& scratch, double h, ThreadBand& band) noexcept {
   const double k = model.material_pair(thread.material, thread.material).stiffness;
   const double reach = 2.0 * thread.radius;
   int touching = 0;
@@ -238,8 +238,20 @@ int add_thread_self_contacts(const Model& model, const ThreadModel& thread,
     const double depth = reach - (p - q).dot(pair.normal);
     if (depth <= 0.0) continue;
     ++touching;
-    const Vec3 f = (h * k * depth) * pair.normal;  // h × the force on s's point; −it on t's
-    const Mat3 m = (2.0 * h * h * k) * (pair.normal * pair.normal.transpose());
+    const Mat3 nn = pair.normal * pair.normal.transpose();
+    Vec3 f = (h * k * depth) * pair.normal;  // h × the force on s's point; −it on t's
+    Mat3 m = (2.0 * h * h * k) * nn;
+    if (thread.self_friction > 0.0) {
+      // Coulomb friction on the sliding of s's point over t's, across the normal: c = μ k d /
+      // max(|v_t|, v_slip) at the iterate, implicit in v as a viscous term (c lagged).
+      const Vec3 vs = (1.0 - pair.us) * v[si] + pair.us * v[si + 1];
+      const Vec3 vt = (1.0 - pair.ut) * v[ti] + pair.ut * v[ti + 1];
+      const Mat3 across = Mat3::Identity() - nn;
+      const Vec3 slide = across * (vs - vt);
+      const double c = thread.self_friction * k * depth / std::max(slide.norm(), kThreadSelfSlipSpeed);
+      f -= (h * c) * slide;
+      m += (2.0 * h * c) * across;
+    }
     const double w[4] = {1.0 - pair.us, pair.us, 1.0 - pair.ut, pair.ut};
     const int blocks[4] = {pair.s + 1, pair.s + 2, pair.t + 1, pair.t + 2};
     for (int a = 0; a < 4; ++a) {

@@ -53,6 +53,8 @@ std::string finalize_thread(ThreadModel& t, int num_bodies, int num_materials) {
     return bad("break_strain", t.break_strain, "> 0");
   if (!(t.tissue_friction >= 0.0) || !std::isfinite(t.tissue_friction))
     return bad("tissue_friction", t.tissue_friction, ">= 0");
+  if (!(t.self_friction >= 0.0) || !std::isfinite(t.self_friction))
+    return bad("self_friction", t.self_friction, ">= 0");
   if (t.material < 0 || t.material >= num_materials)
     return bad("material", t.material, "a material index");
   if (!t.start.allFinite()) return "start must be finite";

@@ -289,7 +289,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
       add_point_term(st, v, sc.terms[static_cast<std::size_t>(t)], h, band);
     // Self contact from the second iteration on: its candidates swept to the first iterate.
     if (iteration == 1 && th.self_contact) find_thread_self_pairs(th, st, x, sc);
-    const int touching = iteration >= 1 && th.self_contact ? add_thread_self_contacts(model, th, x, sc, h, band) : 0;
+    const int touching = iteration >= 1 && th.self_contact ? add_thread_self_contacts(model, th, x, v, sc, h, band) : 0;
     st.output.self_contacts = touching;
     ok = band.solve();
     if (!ok) break;

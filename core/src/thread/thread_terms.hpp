@@ -70,12 +70,14 @@ void find_thread_self_pairs(const ThreadModel& thread, ThreadState& state,
 
 /// Self contact, forces: each candidate pair closer than two radii along its start normal n0 at
 /// the iterate `x` (a pair that crossed within the step is held back the way it came) pushes its
-/// two segments apart by k (2 r − (p − q)·n0) n0, into `band` in Newton's form (its force h f at
-/// the iterate; its stiffness in each side's own blocks, doubled, the other side as given).
-/// Returns the pairs in contact.
+/// two segments apart by k (2 r − (p − q)·n0) n0 and, with the thread's self_friction μ, holds
+/// back their sliding across n0 by Coulomb friction μ k d (regularised to viscous below
+/// kThreadSelfSlipSpeed, at the iterate's velocities `v`), into `band` in Newton's form (its
+/// force h f at the iterate; its stiffness and the friction's damping in each side's own blocks,
+/// doubled, the other side as given). Returns the pairs in contact.
 int add_thread_self_contacts(const Model& model, const ThreadModel& thread,
-                             const std::vector<Vec3>& x, const ThreadScratch& scratch, double h,
-                             ThreadBand& band) noexcept;
+                             const std::vector<Vec3>& x, const std::vector<Vec3>& v,
+                             const ThreadScratch& scratch, double h, ThreadBand& band) noexcept;
 
 /// The active eyelets of `state`: a spring across the thread at its nearest point and Coulomb
 /// friction along it, with the eyelet's drag (ThreadEyelet). An eyelet on tissue past a free end

@@ -50,7 +50,8 @@ void parse_threads(const TomlTable& root, Scene& scene) {
   for (const TomlTable& t : root.tables("thread")) {
     t.allow_only({"name", "length", "segments", "radius", "youngs_modulus_kpa", "density",
                   "damping", "break_strain", "material", "start", "direction", "attach_body",
-                  "attach_point", "attach_direction", "self_contact", "tissue_friction"});
+                  "attach_point", "attach_direction", "self_contact", "tissue_friction",
+                  "self_friction"});
     core::ThreadModel th;
     th.name = t.string_or("name", "thread" + std::to_string(m.threads.size()));
     th.length = thread_number(t, "length", th.length, 0.0, true);
@@ -64,6 +65,7 @@ void parse_threads(const TomlTable& root, Scene& scene) {
     th.damping = thread_number(t, "damping", th.damping, 0.0, false);
     th.break_strain = thread_number(t, "break_strain", th.break_strain, 0.0, true);
     th.tissue_friction = thread_number(t, "tissue_friction", th.tissue_friction, 0.0, false);
+    th.self_friction = thread_number(t, "self_friction", th.self_friction, 0.0, false);
     th.material = thread_material(t, m);
     th.start = t.vec3_or("start", th.start);
     th.direction = t.vec3_or("direction", th.direction);

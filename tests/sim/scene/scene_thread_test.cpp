@@ -55,6 +55,7 @@ TEST(SceneThread, BadThreadsAreLocatedErrorsNamingTheirKeys) {
       {"density = -1.0\n", "thread[0].density", "must be > 0"},
       {"damping = -1.0\n", "thread[0].damping", "must be >= 0"},
       {"tissue_friction = -0.1\n", "thread[0].tissue_friction", "must be >= 0"},
+      {"self_friction = -0.1\n", "thread[0].self_friction", "must be >= 0"},
       {"attach_body = \"nowhere\"\n", "thread[0].attach_body", "no body named \"nowhere\""},
       {"length_mm = 50.0\n", "thread[0].length_mm", "unknown key"},
   };

@@ -61,6 +61,9 @@ inline constexpr int kThreadEyeletTieSprings = 9;
 /// room for them (make_data()).
 inline constexpr int kMaxThreadTissueContacts = 64;
 inline constexpr int kThreadTissueContactSprings = 3;
+/// Below this sliding speed (m/s) the friction between two strands of a thread in self contact
+/// is viscous (ThreadModel::self_friction): μ |F_n| / kThreadSelfSlipSpeed per m/s.
+inline constexpr double kThreadSelfSlipSpeed = 1e-3;
 /// How deep below a net's surface (m) a thread node still touches it: a node deeper is in a
 /// passage through the tissue (behind an eyelet or the needle), not on it.
 inline constexpr double kThreadTissueContactReach = 1e-3;
@@ -105,6 +108,10 @@ struct ThreadModel {
   /// suture (Zhang et al. 2017, "Friction Behavior at the Interface Between Surgical Sutures and
   /// Tissues", Tribol. Lett. 65:4, braided silk the highest); docs/suturing.md.
   double tissue_friction = 0.3;
+  /// Coulomb μ (≥ 0) between two strands of the thread in self contact: a strand sliding over
+  /// another is held back by μ |F_n| (regularised to viscous below kThreadSelfSlipSpeed), what
+  /// holds a knot's throws once pulled tight. 0 (default): frictionless strands.
+  double self_friction = 0.0;
   // ---- derived by finalize_model() ----
   /// The needle (Model::needles) whose body the start is tied to, or −1: the thread takes over
   /// its puncture points past the tail (needle_puncture.hpp, NeedleState::tail_releases).
@@ -178,7 +185,7 @@ struct ThreadState {
 
 /// Checks `thread` (its name or index in `label`) and fills its derived fields. Returns "" or
 /// a message naming the bad setting: length ≤ 0, segments < 1, radius ≤ 0, young_modulus ≤ 0,
-/// density ≤ 0, damping < 0, break_strain ≤ 0, tissue_friction < 0, a zero direction, a tie to a
+/// density ≤ 0, damping < 0, break_strain ≤ 0, tissue_friction < 0, self_friction < 0, a zero direction, a tie to a
 /// body that does not exist, a non-finite value. `num_bodies`, `num_materials`: the model's. Load time.
 std::string finalize_thread(ThreadModel& thread, int num_bodies, int num_materials);
 
