@@ -185,8 +185,9 @@ struct ThreadState {
 
 /// Checks `thread` (its name or index in `label`) and fills its derived fields. Returns "" or
 /// a message naming the bad setting: length ≤ 0, segments < 1, radius ≤ 0, young_modulus ≤ 0,
-/// density ≤ 0, damping < 0, break_strain ≤ 0, tissue_friction < 0, self_friction < 0, a zero direction, a tie to a
-/// body that does not exist, a non-finite value. `num_bodies`, `num_materials`: the model's. Load time.
+/// density ≤ 0, damping < 0, break_strain ≤ 0, tissue_friction < 0, self_friction < 0, a zero
+/// direction, a tie to a body that does not exist, a non-finite value. `num_bodies`,
+/// `num_materials`: the model's. Load time.
 std::string finalize_thread(ThreadModel& thread, int num_bodies, int num_materials);
 
 /// Puts `state` at the initial straight shape of `thread` at rest (no allocation once sized).
