@@ -1,6 +1,6 @@
 /// @file thread_knot_test.cpp
-/// A knot in the suture thread (core/include/numen/core/thread.hpp; docs/suturing.md "A knot
-/// pulled tight"): an overhand knot laid open in a 3-0 silk thread, its two ends pulled apart by
+/// A knot in the suture thread (core/include/numen/core/thread.hpp; docs/suturing.md "A knot"):
+/// an overhand knot laid open in a 3-0 silk thread, its two ends pulled apart by
 /// the hands until the knot holds a stated tension, then held. Whether it is still a knot is
 /// read from the thread itself by a knot invariant (the determinant of its projection, 3 for the
 /// overhand knot's trefoil, 1 for no knot), not from the figures of the run.
@@ -29,8 +29,8 @@ using core::Vec3;
 /// through them. The closed curve is projected along a direction normal to that line (turned by
 /// `turn` rad about it: each turn a different diagram of the same knot), each crossing gives the
 /// colouring relation 2 a_over − a_in − a_out = 0 of the arcs between under-crossings, and the
-/// determinant is that of the relations' matrix less one row and column (Livingston, "Knot
-/// Theory", 1993, §3.4: the unknot 1, the trefoil 3).
+/// determinant is that of the relations' matrix less one row and column (the colouring matrix:
+/// Livingston, "Knot Theory", 1993; the unknot 1, the trefoil 3).
 int knot_determinant(const std::vector<Vec3>& p, double turn) {
   const Vec3 u = (p.back() - p.front()).normalized();
   Vec3 a = Vec3(0.3, 0.5, 0.8) - Vec3(0.3, 0.5, 0.8).dot(u) * u;
@@ -58,7 +58,8 @@ int knot_determinant(const std::vector<Vec3>& p, double turn) {
       const double d1u = (p2 - p1).dot(u), d1a = (p2 - p1).dot(a);
       const double d2u = (q2 - q1).dot(u), d2a = (q2 - q1).dot(a);
       const double den = d1u * d2a - d1a * d2u;
-      if (std::abs(den) <= 1e-9 * std::hypot(d1u, d1a) * std::hypot(d2u, d2a)) continue;  // parallel
+      if (std::abs(den) <= 1e-9 * std::hypot(d1u, d1a) * std::hypot(d2u, d2a))
+        continue;  // parallel
       const double ru = (q1 - p1).dot(u), ra = (q1 - p1).dot(a);
       const double s = (ru * d2a - ra * d2u) / den, t = (ru * d1a - ra * d1u) / den;
       if (s < 0.0 || s >= 1.0 || t < 0.0 || t >= 1.0) continue;
@@ -78,12 +79,15 @@ int knot_determinant(const std::vector<Vec3>& p, double turn) {
   };
   Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(m, m);
   for (int r = 0; r < m; ++r) {
-    const int k = static_cast<int>(std::lower_bound(unders.begin(), unders.end(), crossings[static_cast<std::size_t>(r)].under) - unders.begin());
+    const int k = static_cast<int>(std::lower_bound(unders.begin(), unders.end(),
+                                                    crossings[static_cast<std::size_t>(r)].under) -
+                                   unders.begin());
     rows(r, arc_from(crossings[static_cast<std::size_t>(r)].over)) += 2.0;
     rows(r, (k - 1 + m) % m) -= 1.0;
     rows(r, k) -= 1.0;
   }
-  const int det = static_cast<int>(std::lround(std::abs(rows.bottomRightCorner(m - 1, m - 1).determinant())));
+  const int det =
+      static_cast<int>(std::lround(std::abs(rows.bottomRightCorner(m - 1, m - 1).determinant())));
   return det;
 }
 
@@ -92,8 +96,8 @@ int knot_determinant(const std::vector<Vec3>& p, double turn) {
 /// leaving each cut end outwards at 45° to the lobe's tangent, as a dense polyline.
 std::vector<Vec3> open_overhand_knot(double scale, double tail) {
   const auto trefoil = [&](double t) -> Vec3 {
-    return scale * Vec3(std::sin(t) + 2.0 * std::sin(2.0 * t), std::cos(t) - 2.0 * std::cos(2.0 * t),
-                        -std::sin(3.0 * t));
+    return scale * Vec3(std::sin(t) + 2.0 * std::sin(2.0 * t),
+                        std::cos(t) - 2.0 * std::cos(2.0 * t), -std::sin(3.0 * t));
   };
   double tip = 0.0, reach = 0.0;
   for (int i = 0; i < 10000; ++i) {
@@ -109,11 +113,13 @@ std::vector<Vec3> open_overhand_knot(double scale, double tail) {
   const Vec3 tangent = (trefoil(tip + 1e-4) - trefoil(tip - 1e-4)).normalized();
   const Vec3 first = trefoil(tip + gap), last = trefoil(tip - gap);
   const auto outwards = [&](const Vec3& end) {
-    return ((end - at).dot(tangent) > 0.0 ? Vec3(radial + tangent) : Vec3(radial - tangent)).normalized();
+    return ((end - at).dot(tangent) > 0.0 ? Vec3(radial + tangent) : Vec3(radial - tangent))
+        .normalized();
   };
   std::vector<Vec3> line;
   for (int i = 200; i > 0; --i) line.push_back(first + (tail * i / 200.0) * outwards(first));
-  for (int i = 0; i <= 4000; ++i) line.push_back(trefoil(tip + gap + (2.0 * std::numbers::pi - 2.0 * gap) * i / 4000.0));
+  for (int i = 0; i <= 4000; ++i)
+    line.push_back(trefoil(tip + gap + (2.0 * std::numbers::pi - 2.0 * gap) * i / 4000.0));
   for (int i = 1; i <= 200; ++i) line.push_back(last + (tail * i / 200.0) * outwards(last));
   return line;
 }
@@ -142,20 +148,20 @@ std::vector<Vec3> nodes_along(const std::vector<Vec3>& line, double l0, int segm
 struct KnotPull {
   int determinant_at_start[3]{};
   int determinant_at_end[3]{};
-  double pulled_at = -1.0;        ///< When the ends' mean pull reached the target (s), or −1.
-  double held_force_min = 0.0;    ///< The smallest 50 ms mean pull while held (N).
-  double knot_length = 0.0;       ///< Length minus the ends' distance at the end (m).
+  double pulled_at = -1.0;      ///< When the ends' mean pull reached the target (s), or −1.
+  double held_force_min = 0.0;  ///< The smallest 50 ms mean pull while held (N).
+  double knot_length = 0.0;     ///< Length minus the ends' distance at the end (m).
   double late_min = 0.0, late_max = 0.0;  ///< The 50 ms mean pull's range over the last 0.5 s (N).
-  double closest_strands = 0.0;   ///< Least distance of nodes ≥ 3 apart along it, at the end (m).
-  int self_contacts = 0;          ///< At the end.
+  double closest_strands = 0.0;  ///< Least distance of nodes ≥ 3 apart along it, at the end (m).
+  int self_contacts = 0;         ///< At the end.
   bool broke = false, finite = true;
 };
 
-/// A 3-0 silk thread (the defaults but `self_contact`, `drag`) in 0.25 mm segments laid as the
-/// open overhand knot (scale 1.5 mm, 20 mm tails), its ends tied to two bodies the test moves
-/// apart along the line through them at 10 mm/s each until the ends' pull, averaged over 50 ms,
-/// reaches `pull`; then the bodies stop and the knot is held for `hold` s. Self contact with the
-/// thread's material pair of stiffness `self_stiffness` and Coulomb μ `self_friction`.
+/// A 3-0 silk thread (the defaults but its self contact, drag and friction) in 0.25 mm segments
+/// laid as the open overhand knot (scale 1.5 mm, 20 mm tails), its ends tied to two bodies the test
+/// moves apart along the line through them at 10 mm/s each until the ends' pull, averaged over 50
+/// ms, reaches `pull`; then the bodies stop and the knot is held for `hold` s. Self contact with
+/// the thread's material pair of stiffness `self_stiffness` and Coulomb μ `self_friction`.
 KnotPull pull_knot(bool self_contact, double self_stiffness, double drag, double pull, double hold,
                    double self_friction = 0.0) {
   const double l0 = 0.25e-3;
@@ -164,7 +170,8 @@ KnotPull pull_knot(bool self_contact, double self_stiffness, double drag, double
   for (std::size_t i = 1; i < line.size(); ++i) length += (line[i] - line[i - 1]).norm();
   core::ThreadModel th;
   th.name = "suture";
-  th.segments = static_cast<int>(std::floor(length / l0)) - 2;  // the chords are shorter than the arc
+  th.segments =
+      static_cast<int>(std::floor(length / l0)) - 2;  // the chords are shorter than the arc
   th.length = th.segments * l0;
   th.damping = drag;
   th.self_contact = self_contact;
@@ -223,7 +230,8 @@ KnotPull pull_knot(bool self_contact, double self_stiffness, double drag, double
       out.pulled_at = t;
       end_time = t + hold;
     }
-    if (out.pulled_at >= 0.0 && t > out.pulled_at + 0.05) out.held_force_min = std::min(out.held_force_min, mean_pull);
+    if (out.pulled_at >= 0.0 && t > out.pulled_at + 0.05)
+      out.held_force_min = std::min(out.held_force_min, mean_pull);
     if (out.pulled_at >= 0.0 && t >= end_time - 0.5) {
       out.late_min = std::min(out.late_min, mean_pull);
       out.late_max = std::max(out.late_max, mean_pull);
@@ -252,7 +260,8 @@ TEST(ThreadKnot, TheKnotDeterminantTellsAKnotFromNone) {
   std::vector<Vec3> loop;  // a loop that crosses itself once and is pulled apart: no knot
   for (int i = 0; i <= 400; ++i) {
     const double t = 2.0 * std::numbers::pi * i / 400.0;
-    loop.push_back(Vec3(20e-3 * (i / 400.0 - 0.5) + 3e-3 * std::sin(t), 3e-3 * (1.0 - std::cos(t)), 1e-3 * std::sin(t / 2)));
+    loop.push_back(Vec3(20e-3 * (i / 400.0 - 0.5) + 3e-3 * std::sin(t), 3e-3 * (1.0 - std::cos(t)),
+                        1e-3 * std::sin(t / 2)));
   }
   EXPECT_EQ(knot_determinant(loop, 0.3), 1);
 }
@@ -268,7 +277,8 @@ TEST(ThreadKnot, TheKnotDeterminantTellsAKnotFromNone) {
 TEST(ThreadKnot, AnOverhandKnotPulledTightHoldsTwoNewtons) {
   NUMEN_SKIP_UNDER_SANITIZER(
       "pulls a 313-segment knot through 4 s of simulated time, a figure of the thread's solve, not "
-      "what a sanitizer checks; the self contact's path runs there in Thread.SelfContactKeepsStrandsApart");
+      "what a sanitizer checks; the self contact's path runs there in "
+      "Thread.SelfContactKeepsStrandsApart");
   const KnotPull r = pull_knot(true, 1e5, 100.0, 2.0, 2.0);
   for (int v = 0; v < 3; ++v) {
     EXPECT_EQ(r.determinant_at_start[v], 3) << "view " << v;
@@ -277,15 +287,17 @@ TEST(ThreadKnot, AnOverhandKnotPulledTightHoldsTwoNewtons) {
   EXPECT_GT(r.pulled_at, 1.0);  // the knot's slack taken up first: ~40 mm at 20 mm/s
   EXPECT_GE(r.held_force_min, 1.9);
   EXPECT_LT(r.late_max - r.late_min, 0.5);  // steady, not chattering
-  EXPECT_GT(r.knot_length, 1e-3);  // the knot takes thread: not pulled straight
+  EXPECT_GT(r.knot_length, 1e-3);           // the knot takes thread: not pulled straight
   EXPECT_GT(r.closest_strands, 0.9 * 2.0 * core::ThreadModel{}.radius);
   EXPECT_GT(r.self_contacts, 4);
   EXPECT_FALSE(r.broke);
   EXPECT_TRUE(r.finite);
-  std::printf("knot: pulled to 2 N at %.3f s; held still 2 s: pull at least %.3f N, %.3f-%.3f N over the "
-              "last 0.5 s; knot length %.2f mm; closest strands %.3f mm (diameter %.3f mm); %d self contacts\n",
-              r.pulled_at, r.held_force_min, r.late_min, r.late_max, r.knot_length * 1e3, r.closest_strands * 1e3,
-              2e3 * core::ThreadModel{}.radius, r.self_contacts);
+  std::printf(
+      "knot: pulled to 2 N at %.3f s; held still 2 s: pull at least %.3f N, %.3f-%.3f N over the "
+      "last 0.5 s; knot length %.2f mm; closest strands %.3f mm (diameter %.3f mm); %d self "
+      "contacts\n",
+      r.pulled_at, r.held_force_min, r.late_min, r.late_max, r.knot_length * 1e3,
+      r.closest_strands * 1e3, 2e3 * core::ThreadModel{}.radius, r.self_contacts);
 }
 
 // Friction between the strands (ThreadModel::self_friction, μ = 0.3) holds back the strands
@@ -298,8 +310,9 @@ TEST(ThreadKnot, FrictionBetweenTheStrandsResistsTheKnotsTightening) {
   for (int v = 0; v < 3; ++v) EXPECT_EQ(rough.determinant_at_end[v], 3) << "view " << v;
   EXPECT_GT(rough.knot_length, 2.0 * frictionless.knot_length);
   EXPECT_FALSE(rough.broke);
-  std::printf("knot at 2 N: %.2f mm of thread frictionless, %.2f mm with mu 0.3 between the strands\n",
-              1e3 * frictionless.knot_length, 1e3 * rough.knot_length);
+  std::printf(
+      "knot at 2 N: %.2f mm of thread frictionless, %.2f mm with mu 0.3 between the strands\n",
+      1e3 * frictionless.knot_length, 1e3 * rough.knot_length);
 }
 
 // The same pull without self contact, and with the material's default stiffness (1e4 N/m): the
@@ -308,7 +321,8 @@ TEST(ThreadKnot, WithoutAStiffSelfContactTheKnotComesUndone) {
   NUMEN_SKIP_UNDER_SANITIZER("two pulls of the knot as above, figures of the thread's solve");
   for (const auto& [self, stiffness] : {std::pair{false, 1e5}, std::pair{true, 1e4}}) {
     const KnotPull r = pull_knot(self, stiffness, 100.0, 2.0, 0.5);
-    for (int v = 0; v < 3; ++v) EXPECT_EQ(r.determinant_at_end[v], 1) << "self contact " << self << ", k " << stiffness;
+    for (int v = 0; v < 3; ++v)
+      EXPECT_EQ(r.determinant_at_end[v], 1) << "self contact " << self << ", k " << stiffness;
   }
 }
 
@@ -322,19 +336,23 @@ TEST(ThreadKnotFigures, TheKnotAcrossSelfContactStiffnessAndDrag) {
   NUMEN_SKIP_UNDER_SANITIZER("twelve pulls of the knot, figures of the thread's solve");
   const double stiffness[] = {1e5, 3e5, 1e6};
   const double drag[] = {1e-3, 3.0, 10.0, 100.0};
-  std::printf("| self contact (N/m) | drag (N s/m^2) | a trefoil, whole | pulled to 2 N at (s) | held pull, last 0.5 s (N) |\n");
+  std::printf(
+      "| self contact (N/m) | drag (N s/m^2) | a trefoil, whole | pulled to 2 N at (s) | held "
+      "pull, last 0.5 s (N) |\n");
   for (const double k : stiffness)
     for (const double c : drag) {
       const KnotPull r = pull_knot(true, k, c, 2.0, 1.0);
       bool trefoil = !r.broke && r.finite;
       for (int v = 0; v < 3; ++v) trefoil = trefoil && r.determinant_at_end[v] == 3;
       if (r.pulled_at >= 0.0)
-        std::printf("| %.0e | %g | %s | %.3f | %.3f-%.3f |\n", k, c, trefoil ? "yes" : "no", r.pulled_at, r.late_min,
-                    r.late_max);
+        std::printf("| %.0e | %g | %s | %.3f | %.3f-%.3f |\n", k, c, trefoil ? "yes" : "no",
+                    r.pulled_at, r.late_min, r.late_max);
       else
         std::printf("| %.0e | %g | %s | never | - |\n", k, c, trefoil ? "yes" : "no");
       if (c >= 100.0) EXPECT_TRUE(trefoil) << "k " << k << ", drag " << c;
-      if (c <= 3.0) EXPECT_FALSE(trefoil) << "k " << k << ", drag " << c << ": the limit is lifted; measure the docs again";
+      if (c <= 3.0)
+        EXPECT_FALSE(trefoil) << "k " << k << ", drag " << c
+                              << ": the limit is lifted; measure the docs again";
     }
 }
 

@@ -248,7 +248,8 @@ int add_thread_self_contacts(const Model& model, const ThreadModel& thread,
       const Vec3 vt = (1.0 - pair.ut) * v[ti] + pair.ut * v[ti + 1];
       const Mat3 across = Mat3::Identity() - nn;
       const Vec3 slide = across * (vs - vt);
-      const double c = thread.self_friction * k * depth / std::max(slide.norm(), kThreadSelfSlipSpeed);
+      const double c =
+          thread.self_friction * k * depth / std::max(slide.norm(), kThreadSelfSlipSpeed);
       f -= (h * c) * slide;
       m += (2.0 * h * c) * across;
     }

@@ -30,7 +30,8 @@ TEST(SceneThread, KeysAreReadIntoTheModel) {
   numen::test::TempDir dir;
   const std::string text = probe_scene() +
                            "\n[[thread]]\nname = \"suture\"\nlength = 0.05\nsegments = 50\n"
-                           "attach_body = \"probe\"\ndirection = [1.0, 0.0, 0.0]\nself_friction = 0.3\n";
+                           "attach_body = \"probe\"\ndirection = [1.0, 0.0, 0.0]\n"
+                           "self_friction = 0.3\n";
   const numen::sim::Scene s = numen::sim::load_scene(dir.write("thread.toml", text));
   ASSERT_EQ(s.model.threads.size(), 1u);
   EXPECT_EQ(s.model.threads[0].name, "suture");
