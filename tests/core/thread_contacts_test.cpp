@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <vector>
 
 #include "linalg/thread_band.hpp"
 #include "numen/core/model.hpp"
@@ -19,18 +20,21 @@ namespace {
 using core::Mat3;
 using core::Vec3;
 
-/// Segment 1 (nodes 1–2, along x) lying on segment 5 (nodes 5–6, along y) `depth` deeper than
-/// their two radii, segment 1's nodes sliding at `slide` (m/s, along x) over the still segment
-/// 5: the self-contact terms (add_thread_self_contacts()) of a 10-segment thread of the
-/// material's stiffness `k` and μ `mu`, h = 1 ms. Returns the force on segment 1 (the sum of its
-/// two blocks' right-hand side, divided by h) and its blocks' matrix (the sum of the four 3×3
-/// blocks of nodes 1 and 2, divided by h).
+/// What pair_terms() found.
 struct PairTerms {
   Vec3 force = Vec3::Zero();
   Mat3 matrix = Mat3::Zero();
   Vec3 force_on_other = Vec3::Zero();
   int touching = 0;
 };
+
+/// Segment 1 (nodes 1–2, along x) lying on segment 5 (nodes 5–6, along y) `depth` deeper than
+/// their two radii, segment 1's nodes sliding at `slide` (m/s, along x) over the still segment
+/// 5: the self-contact terms (add_thread_self_contacts()) of a 10-segment thread of the
+/// material's stiffness `k` and μ `mu`, h = 1 ms. Returns the force on segment 1 (the sum of its
+/// two blocks' right-hand side, divided by h) and its blocks' matrix (the sum of the four 3×3
+/// blocks of nodes 1 and 2, divided by h), the force on segment 5 likewise, and whether the pair
+/// touched.
 PairTerms pair_terms(double k, double mu, double depth, double slide) {
   core::Model m;
   m.material_names = {"silk"};
