@@ -232,8 +232,9 @@ std::size_t encode_state_frame(const StateFrameLayout& layout, const core::Data&
              figures.device_port_energy);
   p = array(FrameArray::kGrasp);
   for (const core::GraspState& g : data.grasps)
-    p = put_floats(p, g.body, g.net, g.body >= 0 ? g.num_points : g.num_nodes, g.opening,
-                   g.grip_force, g.grasps, g.releases, g.slips);
+    p = put_floats(p, g.body, g.net,
+                   g.body >= 0 ? g.num_points : g.thread >= 0 ? g.num_thread_nodes : g.num_nodes,
+                   g.opening, g.grip_force, g.grasps, g.releases, g.slips, g.thread);
   p = array(FrameArray::kExtraDevice);
   std::byte* t = array(FrameArray::kExtraAxisTorque);
   for (const FrameDeviceInput& d : extra_devices) {
@@ -314,8 +315,8 @@ void StateFrameView::device_loop(float out[3]) const noexcept {
 FrameGrasp StateFrameView::grasp(std::uint32_t g) const noexcept {
   float v[kFrameGraspFloats];
   f32s(item(FrameArray::kGrasp, g), v, kFrameGraspFloats);
-  static_assert(kFrameGraspFloats == 8);
-  return FrameGrasp{v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]};
+  static_assert(kFrameGraspFloats == 9);
+  return FrameGrasp{v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]};
 }
 
 FrameDevice StateFrameView::extra_device(std::uint32_t d) const noexcept {

@@ -81,8 +81,8 @@ struct Period {
 TEST(StateFrame, SizeFollowsTheLayout) {
   const StateFrameLayout layout{2, 10, 3, 5, 2};
   // 84 header + 2·28 poses + 2·32 targets + 10·12 nodes + c·40 contacts + 24 wrench + 4·3 axes
-  // + 8 penetrations + 12 closed-loop figures + 2·32 graspers.
-  EXPECT_EQ(layout.frame_bytes(0), 84u + 56 + 64 + 120 + 24 + 12 + 8 + 12 + 64);
+  // + 8 penetrations + 12 closed-loop figures + 2·36 graspers.
+  EXPECT_EQ(layout.frame_bytes(0), 84u + 56 + 64 + 120 + 24 + 12 + 8 + 12 + 72);
   EXPECT_EQ(layout.frame_bytes(4), layout.frame_bytes(0) + 160);
   EXPECT_EQ(layout.max_frame_bytes(), layout.frame_bytes(5));
   // Two other devices of 6 and 7 axes: 2·48 + 13·4.
@@ -163,6 +163,7 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_FLOAT_EQ(g.grasps, 2.0F);
   EXPECT_FLOAT_EQ(g.releases, 1.0F);
   EXPECT_FLOAT_EQ(g.slips, 0.0F);
+  EXPECT_FLOAT_EQ(g.thread, -1.0F);
 }
 
 // Tissue held: the grasp item carries the net and its held nodes.
@@ -181,6 +182,25 @@ TEST(StateFrame, CarriesAGraspOfTissue) {
   EXPECT_FLOAT_EQ(g.net, 0.0F);
   EXPECT_FLOAT_EQ(g.held, 3.0F);  // held nodes
   EXPECT_FLOAT_EQ(g.slips, 4.0F);
+}
+
+// A thread held: the grasp item carries the thread and its held nodes (neither body nor net).
+TEST(StateFrame, CarriesAGraspOfAThread) {
+  Period p;
+  p.data.grasps[0].body = -1;
+  p.data.grasps[0].net = -1;
+  p.data.grasps[0].thread = 0;
+  p.data.grasps[0].num_thread_nodes = 2;
+  std::vector<std::byte> buf(p.layout.max_frame_bytes());
+  const std::size_t n =
+      numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
+  StateFrameView v;
+  ASSERT_TRUE(StateFrameDecoder::decode(std::span(buf.data(), n), v).ok());
+  const numen::platform::FrameGrasp g = v.grasp(0);
+  EXPECT_FLOAT_EQ(g.body, -1.0F);
+  EXPECT_FLOAT_EQ(g.net, -1.0F);
+  EXPECT_FLOAT_EQ(g.thread, 0.0F);
+  EXPECT_FLOAT_EQ(g.held, 2.0F);  // held thread nodes
 }
 
 /// Decodes the first `n` bytes of `buf` into `v`: the decoder's reason, empty when accepted.
@@ -352,7 +372,7 @@ TEST(StateFrame, EachDeclaredFieldIsAtItsDeclaredOffset) {
     std::uint64_t want = 0;
     switch (f.id) {
       case FrameField::kMagic: want = 0x46564D4E; break;  // "NMVF"
-      case FrameField::kVersion: want = 5; break;
+      case FrameField::kVersion: want = 6; break;
       case FrameField::kHeaderBytes: want = 84; break;
       case FrameField::kFrameBytes: want = n; break;
       case FrameField::kNumBodies: want = 2; break;
@@ -427,7 +447,7 @@ TEST(StateFrame, IsLittleEndianOnTheWire) {
       numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
   ASSERT_GT(n, 84u);
   EXPECT_EQ(std::memcmp(buf.data(), "NMVF", 4), 0);
-  EXPECT_EQ(std::to_integer<int>(buf[4]), 5);  // version, low byte first
+  EXPECT_EQ(std::to_integer<int>(buf[4]), 6);  // version, low byte first
   EXPECT_EQ(std::to_integer<int>(buf[5]), 0);
   EXPECT_EQ(std::to_integer<int>(buf[32]), 42);  // period 42, low byte first
   // body 0's x = 0.01f: 0x3C23D70A, bytes 0A D7 23 3C
@@ -513,8 +533,8 @@ TEST(StateFrameDecoder, RejectsEveryMalformedFrameWithItsOffset) {
   b[0] = std::byte{'X'};
   EXPECT_NE(decode(b).find("byte 0: not a state frame"), std::string::npos);
   b = buf;
-  b[4] = std::byte{4};  // the version before the threads: a recording of an older numen
-  EXPECT_NE(decode(b).find("byte 4: frame version 4, this reader knows 5 (written by an older numen: "
+  b[4] = std::byte{5};  // the version before a grasp's held thread: a recording of an older numen
+  EXPECT_NE(decode(b).find("byte 4: frame version 5, this reader knows 6 (written by an older numen: "
                            "record the run again with this one)"),
             std::string::npos)
       << decode(b);

@@ -66,12 +66,12 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
       ++event_count;
     }
     // Grasp events: a grasper's grasp, release or slip count grew since the previous frame.
-    if (k == 0) grasps.assign(h.num_grasps, platform::FrameGrasp{-1, -1, 0, 0, 0, 0, 0, 0});
+    if (k == 0) grasps.assign(h.num_grasps, platform::FrameGrasp{-1, -1, 0, 0, 0, 0, 0, 0, -1});
     for (std::uint32_t g = 0; g < h.num_grasps && g < grasps.size(); ++g) {
       const platform::FrameGrasp now = v.grasp(g), before = grasps[g];
       // In the order they happened: holding now, the last one is the grasp (an end before it
       // let go of what the previous frame held); not holding, the grasp came first.
-      const bool holding = now.body >= 0 || now.net >= 0;
+      const bool holding = now.body >= 0 || now.net >= 0 || now.thread >= 0;
       const std::pair<const char*, double> grasp{"grasp", now.grasps - before.grasps},
           release{"release", now.releases - before.releases}, slip{"slip", now.slips - before.slips};
       const std::array<std::pair<const char*, double>, 3> kinds =
@@ -82,7 +82,8 @@ std::string view_replay_series(ViewFrameSource& source, std::size_t max_points) 
         if (grasp_events.size() < kViewSeriesMaxEvents)
           grasp_events.push_back({{"frame", k}, {"t", round6(p.t)}, {"grasper", g}, {"event", kind},
                                   {"body", static_cast<int>(ended ? before.body : now.body)},
-                                  {"net", static_cast<int>(ended ? before.net : now.net)}});
+                                  {"net", static_cast<int>(ended ? before.net : now.net)},
+                                  {"thread", static_cast<int>(ended ? before.thread : now.thread)}});
         ++grasp_event_count;
       }
       grasps[g] = now;

@@ -65,10 +65,11 @@ export function showFault(fr, managed, deviceName = (i) => 'device ' + i) {
 }
 
 /// Marks the replay timeline (#marks, under the slider) at the series' events and its grasp
-/// events (`grasperName(i)`, `objectName(body, net)` name them in the mark's tooltip); a click on
-/// a mark calls seek(frame). Returns the marks drawn.
+/// events (`grasperName(i)`, `objectName(body, net, thread)` name them in the mark's tooltip);
+/// a click on a mark calls seek(frame). Returns the marks drawn.
 export function markTimeline(series, frames, seek, grasperName = (i) => 'grasper ' + i,
-                             objectName = (b, n) => (b >= 0 ? 'body ' + b : n >= 0 ? 'net ' + n : '?')) {
+                             objectName = (b, n, t = -1) =>
+                               (b >= 0 ? 'body ' + b : n >= 0 ? 'net ' + n : t >= 0 ? 'thread ' + t : '?')) {
   const el = document.getElementById('marks');
   el.textContent = '';
   if (!series || !frames) return 0;
@@ -91,7 +92,7 @@ export function markTimeline(series, frames, seek, grasperName = (i) => 'grasper
     const m = document.createElement('span');
     m.className = 'mark ' + e.event;  // grasp, release, slip
     m.style.left = (100 * e.frame / Math.max(1, frames - 1)) + '%';
-    m.title = `t = ${e.t.toFixed(3)} s: ${e.event} ${grasperName(e.grasper)}: ${objectName(e.body, e.net)}`;
+    m.title = `t = ${e.t.toFixed(3)} s: ${e.event} ${grasperName(e.grasper)}: ${objectName(e.body, e.net, e.thread ?? -1)}`;
     m.onclick = () => seek(e.frame);
     el.appendChild(m);
     ++n;

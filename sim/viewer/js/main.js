@@ -66,21 +66,25 @@ function deviceLines(fr) {
   return out;
 }
 
-/// The scene's name of grasper i, of what a grasp holds (a body or a net's tissue).
+/// The scene's name of grasper i, of what a grasp holds (a body, a net's tissue or a thread).
 const grasperName = (i) => S.scene?.grasps?.[i]?.name ?? 'grasper ' + i;
-const objectName = (b, n) => (b >= 0 ? S.scene.bodies[b]?.name ?? 'body ' + b
-                              : n >= 0 ? (S.scene.nets[n]?.name ?? 'net ' + n) + ' (tissue)' : 'something');
+const objectName = (b, n, t = -1) => (b >= 0 ? S.scene.bodies[b]?.name ?? 'body ' + b
+                              : n >= 0 ? (S.scene.nets[n]?.name ?? 'net ' + n) + ' (tissue)'
+                              : t >= 0 ? 'thread ' + (S.scene.threads?.[t]?.name ?? t) : 'something');
 
-/// One line per grasper of frame fr: what it holds (the grip's springs or the held nodes, its
-/// pull) or that it is open, with its jaws' opening; '' without graspers.
+/// One line per grasper of frame fr: what it holds (a body: the grip's springs; tissue or a
+/// thread: the held nodes; its pull) or that it is open, with its jaws' opening; '' without
+/// graspers.
 function graspLines(fr) {
   const K = FLOATS.grasp, g = fr.grasp;
   let out = '';
   for (let i = 0; i < fr.h.num_grasps; ++i) {
     const [body, net, held, opening, pull] = g.subarray(K * i, K * i + 5);
+    const thread = g[K * i + 8];  // the held thread (frame version 6), −1: none
     const deg = (opening * 180 / Math.PI).toFixed(1);
-    out += `\ngrasp ${grasperName(i)}: ` + (body >= 0 || net >= 0
-      ? `holds ${objectName(body, net)} (${held} ${body >= 0 ? 'springs' : 'nodes'}, pull ${pull.toFixed(2)} N)`
+    const what = body >= 0 || net >= 0 || thread >= 0 ? objectName(body, net, thread) : '';
+    out += `\ngrasp ${grasperName(i)}: ` + (what
+      ? `holds ${what} (${held} ${body >= 0 ? 'springs' : 'nodes'}, pull ${pull.toFixed(2)} N)`
       : 'empty') + `, jaws ${deg}°`;
   }
   return out;

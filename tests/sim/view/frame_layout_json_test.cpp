@@ -120,7 +120,7 @@ TEST(FrameLayoutJson, AFrameDecodedFromTheJsonReadsWhatTheViewReads) {
       {"lifecycle", h.lifecycle},
       {"startup", h.startup},
       {"fault_cause", h.fault_cause},
-      {"version", 5},
+      {"version", 6},
       {"header_bytes", 84},
       {"sample_faults", h.sample_faults},
       {"num_grasps", h.num_grasps},

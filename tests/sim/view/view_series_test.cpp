@@ -130,15 +130,24 @@ TEST(ViewSeriesGrasps, EventsAreWhereAGraspersCountsGrew) {
   d.grasps[0].net = -1;                   // frame 5: and releases it
   d.grasps[0].releases = 2;
   frames.add(d);
+  d.grasps[1].thread = 0;                 // frame 6: grasper 1 takes thread 0 (3 nodes)
+  d.grasps[1].num_thread_nodes = 3;
+  d.grasps[1].grasps = 2;
+  frames.add(d);
+  d.grasps[1].thread = -1;                // frame 7: and lets it go
+  d.grasps[1].releases = 1;
+  frames.add(d);
   const auto j = nlohmann::json::parse(numen::sim::view_replay_series(frames));
-  ASSERT_EQ(j["grasp_event_count"], 6) << j["grasp_events"].dump();
+  ASSERT_EQ(j["grasp_event_count"], 8) << j["grasp_events"].dump();
   const auto& e = j["grasp_events"];
-  auto is = [&](std::size_t i, std::size_t frame, int grasper, const char* kind, int body, int net) {
+  auto is = [&](std::size_t i, std::size_t frame, int grasper, const char* kind, int body, int net,
+                int thread = -1) {
     EXPECT_EQ(e[i]["frame"], frame) << i;
     EXPECT_EQ(e[i]["grasper"], grasper) << i;
     EXPECT_EQ(e[i]["event"], kind) << i;
     EXPECT_EQ(e[i]["body"], body) << i;
     EXPECT_EQ(e[i]["net"], net) << i;
+    EXPECT_EQ(e[i]["thread"], thread) << i;
   };
   is(0, 1, 1, "grasp", 0, -1);
   is(1, 3, 0, "grasp", -1, -1);   // grasped and let go between frames 2 and 3: what, unknown
@@ -146,6 +155,8 @@ TEST(ViewSeriesGrasps, EventsAreWhereAGraspersCountsGrew) {
   is(3, 3, 1, "slip", 0, -1);     // what the previous frame held
   is(4, 4, 0, "grasp", -1, 0);
   is(5, 5, 0, "release", -1, 0);
+  is(6, 6, 1, "grasp", -1, -1, 0);    // a thread
+  is(7, 7, 1, "release", -1, -1, 0);  // what the previous frame held
 }
 
 }  // namespace

@@ -35,7 +35,8 @@ namespace numen::platform {
 inline constexpr char kStateFrameMagic[4] = {'N', 'M', 'V', 'F'};
 /// Version written by encode_state_frame() and the only one decode_state_frame() accepts.
 /// 5: the suture threads (num_threads, num_thread_nodes, thread, thread_node; issue 69).
-inline constexpr std::uint16_t kStateFrameVersion = 5;
+/// 6: a grasp item's held thread (its ninth float; docs/suturing.md "The thread in the jaws").
+inline constexpr std::uint16_t kStateFrameVersion = 6;
 /// Size of the fixed header, bytes.
 inline constexpr std::size_t kStateFrameHeaderBytes = 84;
 
@@ -95,8 +96,8 @@ struct StateFrameField {
 /// The 84-byte header, field by field (names as StateFrameHeader's members):
 ///
 ///     magic          "NMVF" (kStateFrameMagic)
-///     version        kStateFrameVersion (4)
-///     header_bytes   kStateFrameHeaderBytes (76)
+///     version        kStateFrameVersion (6)
+///     header_bytes   kStateFrameHeaderBytes (84)
 ///     frame_bytes    the whole frame, bytes
 ///     num_bodies     B: bodies
 ///     num_nodes      N: net nodes
@@ -218,7 +219,7 @@ inline constexpr std::array<StateFrameArray, 13> kStateFrameArrays{{
     {FrameArray::kAxisTorque, "axis_torque", 1, FrameField::kNumAxes},
     {FrameArray::kPenetration, "penetration", 2, std::nullopt},
     {FrameArray::kDeviceLoop, "device_loop", 3, std::nullopt},
-    {FrameArray::kGrasp, "grasp", 8, FrameField::kNumGrasps},
+    {FrameArray::kGrasp, "grasp", 9, FrameField::kNumGrasps},
     {FrameArray::kExtraDevice, "extra_device", 12, FrameField::kNumExtraDevices},
     {FrameArray::kExtraAxisTorque, "extra_axis_torque", 1, FrameField::kNumExtraAxes},
     {FrameArray::kThread, "thread", 2, FrameField::kNumThreads},
@@ -319,12 +320,13 @@ struct StateFrameLayout {
 struct FrameGrasp {
   float body;       ///< The held body, −1: none.
   float net;        ///< The net whose tissue is held, −1: none.
-  float held;       ///< Held nodes (tissue) or grip springs (a body); 0: nothing held.
+  float held;       ///< Held nodes (tissue, a thread) or grip springs (a body); 0: nothing held.
   float opening;    ///< The jaws' opening (rad).
   float grip_force; ///< The grip's pull on what it holds (N).
   float grasps;     ///< Grasps started since the run's start.
   float releases;   ///< Grasps ended by the jaws opening.
   float slips;      ///< Grasps ended by the pull exceeding the grip's limit.
+  float thread;     ///< The thread (Model::threads) whose nodes are held, −1: none.
 };
 
 /// One of the loop's other devices in a frame (kStateFrameArrays' extra_device item).

@@ -32,8 +32,8 @@ inline constexpr std::size_t kViewSeriesMaxEvents = 256;
 ///   "grasp_events": each grasp, release and slip, at the first frame whose grasper's count of
 ///     it grew (the frame's grasp array: counts, so a grasp between two decimated frames is not
 ///     lost; the first kViewSeriesMaxEvents: frame, t, grasper, "event" — "grasp", "release" or
-///     "slip" —, body and net held (−1: none; at a release or slip, what the previous frame
-///     held)), "grasp_event_count": all of them.
+///     "slip" —, body, net and thread held (−1: none; at a release or slip, what the previous
+///     frame held)), "grasp_event_count": all of them.
 /// Throws std::runtime_error naming the frame when a frame does not decode (a recording's
 /// reader checked them already). Reads every frame once: setup, not the loop.
 std::string view_replay_series(ViewFrameSource& source, std::size_t max_points = kViewSeriesMaxPoints);
