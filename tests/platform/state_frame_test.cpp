@@ -166,22 +166,28 @@ TEST(StateFrame, RoundTripsEveryField) {
   EXPECT_FLOAT_EQ(g.thread, -1.0F);
 }
 
+/// Period `p`'s frame encoded and decoded: its first grasper's item.
+numen::platform::FrameGrasp first_grasp(const Period& p) {
+  std::vector<std::byte> buf(p.layout.max_frame_bytes());
+  const std::size_t n =
+      numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
+  StateFrameView v;
+  EXPECT_TRUE(StateFrameDecoder::decode(std::span(buf.data(), n), v).ok());
+  return v.grasp(0);
+}
+
 // Tissue held: the grasp item carries the net and its held nodes.
 TEST(StateFrame, CarriesAGraspOfTissue) {
   Period p;
   p.data.grasps[0].body = -1;
   p.data.grasps[0].net = 0;
   p.data.grasps[0].slips = 4;
-  std::vector<std::byte> buf(p.layout.max_frame_bytes());
-  const std::size_t n =
-      numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
-  StateFrameView v;
-  ASSERT_TRUE(StateFrameDecoder::decode(std::span(buf.data(), n), v).ok());
-  const numen::platform::FrameGrasp g = v.grasp(0);
+  const numen::platform::FrameGrasp g = first_grasp(p);
   EXPECT_FLOAT_EQ(g.body, -1.0F);
   EXPECT_FLOAT_EQ(g.net, 0.0F);
   EXPECT_FLOAT_EQ(g.held, 3.0F);  // held nodes
   EXPECT_FLOAT_EQ(g.slips, 4.0F);
+  EXPECT_FLOAT_EQ(g.thread, -1.0F);
 }
 
 // A thread held: the grasp item carries the thread and its held nodes (neither body nor net).
@@ -191,12 +197,7 @@ TEST(StateFrame, CarriesAGraspOfAThread) {
   p.data.grasps[0].net = -1;
   p.data.grasps[0].thread = 0;
   p.data.grasps[0].num_thread_nodes = 2;
-  std::vector<std::byte> buf(p.layout.max_frame_bytes());
-  const std::size_t n =
-      numen::platform::encode_state_frame(p.layout, p.data, p.report, p.torques, p.figures, buf);
-  StateFrameView v;
-  ASSERT_TRUE(StateFrameDecoder::decode(std::span(buf.data(), n), v).ok());
-  const numen::platform::FrameGrasp g = v.grasp(0);
+  const numen::platform::FrameGrasp g = first_grasp(p);
   EXPECT_FLOAT_EQ(g.body, -1.0F);
   EXPECT_FLOAT_EQ(g.net, -1.0F);
   EXPECT_FLOAT_EQ(g.thread, 0.0F);
