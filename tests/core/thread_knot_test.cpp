@@ -18,6 +18,7 @@
 #include "numen/core/step.hpp"
 #include "numen/core/thread.hpp"
 #include "sanitizer.hpp"
+#include "thread_scenes.hpp"
 
 namespace numen {
 namespace {
@@ -179,26 +180,13 @@ KnotPull pull_knot(bool self_contact, double self_stiffness, double drag, double
   const std::vector<Vec3> nodes = nodes_along(line, l0, th.segments);
   EXPECT_EQ(static_cast<int>(nodes.size()), th.segments + 1);
   th.start = nodes.front();
-  core::Model m;
-  m.dt = 1e-3;
-  m.gravity = Vec3::Zero();
-  m.material_names = {"silk"};
-  core::MaterialPair silk;
-  silk.stiffness = self_stiffness;
-  m.material_pairs = {silk};
-  m.initial_held_body = -1;
-  for (const Vec3& end : {nodes.front(), nodes.back()}) {  // the hands: bodies the test moves
-    core::BodyModel hand;
-    hand.name = m.bodies.empty() ? "left" : "right";
-    hand.mass = 1.0;
-    hand.inertia_body = 1e-3 * core::Mat3::Identity();
-    hand.initial_pose.position = end;
-    m.bodies.push_back(hand);
-  }
-  th.tie_start.body = 0;
-  th.tie_end.body = 1;
-  m.threads.push_back(th);
-  EXPECT_EQ(core::finalize_model(m), "");
+  const core::Model m = test::thread_model(th, [&](core::Model& mm) {
+    mm.material_pairs[0].stiffness = self_stiffness;
+    for (const Vec3& end : {nodes.front(), nodes.back()})  // the hands: bodies the test moves
+      test::add_thread_test_body(mm, 1.0, 1e-3, end, 0.0);
+    mm.threads[0].tie_start = core::ThreadTie{0, Vec3::Zero()};
+    mm.threads[0].tie_end = core::ThreadTie{1, Vec3::Zero()};
+  });
   core::Data d = core::make_data(m);
   core::ThreadState& s = d.threads[0];
   for (std::size_t i = 0; i < nodes.size(); ++i) s.position[i] = nodes[i];
