@@ -43,7 +43,11 @@ PUNCTURE_FORCE = 1.0           # N: 3-0 taper needle through skin (docs/suturing
 # ---- the pad: a box net on an anchored core, its top at z = 0 (a finer top face than 2 mm: the
 # entry's material point is found on a triangle of it)
 PAD_HALF = (0.012, 0.010, 0.004)  # m: 24 x 20 x 8 mm
-PAD_SUBDIVISIONS = 23            # each face a 24 x 24 grid: 1 x 0.83 mm on the top face
+PAD_SUBDIVISIONS = (23, 23, 2)   # per axis: the top and bottom faces a 24 x 24 grid (1 x 0.83 mm
+                                 # on the top), the sides 3 rows of 2.7 mm (the needle meets the top
+                                 # face alone; 23 along z gave 3 458 nodes for the same top face)
+PAD_NODES = ((PAD_SUBDIVISIONS[0] + 2) * (PAD_SUBDIVISIONS[1] + 2) * (PAD_SUBDIVISIONS[2] + 2)
+             - PAD_SUBDIVISIONS[0] * PAD_SUBDIVISIONS[1] * PAD_SUBDIVISIONS[2])
 
 # ---- the pass: the needle's plane normal to the arc's axis N, tilted ALPHA from horizontal
 ALPHA = math.radians(20.0)     # the shafts come down at 20 deg from the horizontal, from +x
@@ -346,7 +350,7 @@ stiffness = 2.0e4     # N/m per sphere contact
 damping = 10.0        # N·s/m
 friction = 0.5        # N·s/m, viscous tangential
 
-# ---- the pad: a 24 x 20 x 8 mm box net (1 x 0.83 mm on its top face), each node tied to its rest place
+# ---- the pad: a 24 x 20 x 8 mm box net (1 x 0.83 mm on its top face, 2.7 mm rows on its sides), each node tied to its rest place
 # on an anchored core (the organ's constants per spring, as tests/core/needle_puncture_test.cpp's)
 
 [[body]]
@@ -362,8 +366,8 @@ name = "pad"
 body = "pad_core"
 mesh = "box"
 half_extents = {vec(PAD_HALF)}
-subdivisions = {PAD_SUBDIVISIONS}
-mass = {7e-5 * (6 * (PAD_SUBDIVISIONS + 2) ** 2 - 12 * (PAD_SUBDIVISIONS + 2) + 8):.6f}   # 70 mg a node
+subdivisions = [{PAD_SUBDIVISIONS[0]}, {PAD_SUBDIVISIONS[1]}, {PAD_SUBDIVISIONS[2]}]   # x, y, z: {PAD_NODES} nodes
+mass = {7e-5 * PAD_NODES:.6f}   # 70 mg a node
 stiffness = 200.0
 damping = 0.1
 bending_stiffness = 50.0

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -266,9 +268,39 @@ TEST(MeshBox, AreaAndVolumeExact) {
   }
 }
 
+TEST(MeshBox, SubdividedPerAxisIsClosedOutwardWithTheGridsOnItsFaces) {
+  const Vec3 h(0.012, 0.010, 0.004);
+  for (const std::array<int, 3> n : {std::array<int, 3>{23, 23, 2}, std::array<int, 3>{0, 3, 1},
+                                     std::array<int, 3>{4, 0, 0}}) {
+    SCOPED_TRACE(std::to_string(n[0]) + ", " + std::to_string(n[1]) + ", " + std::to_string(n[2]));
+    const TriangleMesh m = make_box(h, n);
+    EXPECT_EQ(m.num_vertices(), (n[0] + 2) * (n[1] + 2) * (n[2] + 2) - n[0] * n[1] * n[2]);
+    EXPECT_EQ(m.num_triangles(), 4 * ((n[0] + 1) * (n[1] + 1) + (n[1] + 1) * (n[2] + 1) +
+                                      (n[2] + 1) * (n[0] + 1)));
+    expect_closed_sphere_like(m);
+    expect_outward(m);
+    expect_no_duplicate_vertices(m, 1e-9);
+    EXPECT_NEAR(area(m), 8.0 * (h.x() * h.y() + h.y() * h.z() + h.z() * h.x()), 1e-15);
+    EXPECT_NEAR(signed_volume(m), 8.0 * h.prod(), 1e-17);
+    // Each axis's vertices lie on its own grid: 2 h_d / (n_d + 1) apart.
+    for (const Vec3& v : m.vertices)
+      for (int d = 0; d < 3; ++d) {
+        const double cells = (v[d] + h[d]) / (2.0 * h[d] / (n[static_cast<std::size_t>(d)] + 1));
+        EXPECT_NEAR(cells, std::round(cells), 1e-9) << "axis " << d;
+      }
+  }
+  // One count for all three axes is the uniform box, vertex for vertex.
+  const TriangleMesh uniform = make_box(h, 3), same = make_box(h, std::array<int, 3>{3, 3, 3});
+  ASSERT_EQ(uniform.num_vertices(), same.num_vertices());
+  for (int i = 0; i < uniform.num_vertices(); ++i)
+    EXPECT_EQ(uniform.vertices[static_cast<std::size_t>(i)], same.vertices[static_cast<std::size_t>(i)]);
+  EXPECT_EQ(uniform.triangles, same.triangles);
+}
+
 TEST(MeshBox, InvalidArgumentsGiveAnEmptyMesh) {
   EXPECT_EQ(make_box(Vec3(0.1, 0.0, 0.1), 0).num_triangles(), 0);
   EXPECT_EQ(make_box(Vec3(0.1, 0.1, 0.1), -1).num_triangles(), 0);
+  EXPECT_EQ(make_box(Vec3(0.1, 0.1, 0.1), std::array<int, 3>{2, -1, 2}).num_triangles(), 0);
 }
 
 // --- validate_mesh -----------------------------------------------------------

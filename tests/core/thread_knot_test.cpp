@@ -332,15 +332,19 @@ TEST(ThreadKnotFigures, TheKnotAcrossSelfContactStiffnessAndDrag) {
       const KnotPull r = pull_knot(true, k, c, 2.0, 1.0);
       bool trefoil = !r.broke && r.finite;
       for (int v = 0; v < 3; ++v) trefoil = trefoil && r.determinant_at_end[v] == 3;
-      if (r.pulled_at >= 0.0)
+      if (r.pulled_at >= 0.0) {
         std::printf("| %.0e | %g | %s | %.3f | %.3f-%.3f |\n", k, c, trefoil ? "yes" : "no",
                     r.pulled_at, r.late_min, r.late_max);
-      else
+      } else {
         std::printf("| %.0e | %g | %s | never | - |\n", k, c, trefoil ? "yes" : "no");
-      if (c >= 100.0) EXPECT_TRUE(trefoil) << "k " << k << ", drag " << c;
-      if (c <= 3.0)
+      }
+      if (c >= 100.0) {
+        EXPECT_TRUE(trefoil) << "k " << k << ", drag " << c;
+      }
+      if (c <= 3.0) {
         EXPECT_FALSE(trefoil) << "k " << k << ", drag " << c
                               << ": the limit is lifted; measure the docs again";
+      }
     }
 }
 

@@ -195,21 +195,28 @@ TriangleMesh make_torus(double major_radius, double minor_radius, int segments, 
 }
 
 TriangleMesh make_box(const Vec3& half_extents, int subdivisions) {
+  return make_box(half_extents, std::array<int, 3>{subdivisions, subdivisions, subdivisions});
+}
+
+TriangleMesh make_box(const Vec3& half_extents, const std::array<int, 3>& subdivisions) {
   TriangleMesh mesh;
-  if (!half_extents.allFinite() || !(half_extents.minCoeff() > 0.0) || subdivisions < 0) {
+  if (!half_extents.allFinite() || !(half_extents.minCoeff() > 0.0) ||
+      *std::min_element(subdivisions.begin(), subdivisions.end()) < 0) {
     return mesh;
   }
-  // Grid points are the surface points of the integer lattice [0, m]³; a map
-  // from lattice point to vertex shares them between faces.
-  const int m = subdivisions + 1;
+  // Grid points are the surface points of the integer lattice [0, m_x] × [0, m_y] × [0, m_z],
+  // m_d = subdivisions[d] + 1; a map from lattice point to vertex shares them between faces.
+  std::array<int, 3> m{};
+  for (int d = 0; d < 3; ++d) m[at(d)] = subdivisions[at(d)] + 1;
   std::unordered_map<std::int64_t, int> index;
   auto vertex = [&](const std::array<int, 3>& l) {
-    const std::int64_t key = (static_cast<std::int64_t>(l[0]) * (m + 1) + l[1]) * (m + 1) + l[2];
+    const std::int64_t key =
+        (static_cast<std::int64_t>(l[0]) * (m[1] + 1) + l[1]) * (m[2] + 1) + l[2];
     const auto [it, inserted] = index.try_emplace(key, mesh.num_vertices());
     if (inserted) {
       Vec3 x;
       for (int d = 0; d < 3; ++d) {
-        x[d] = half_extents[d] * (2.0 * l[at(d)] / m - 1.0);
+        x[d] = half_extents[d] * (2.0 * l[at(d)] / m[at(d)] - 1.0);
       }
       mesh.vertices.push_back(x);
     }
@@ -219,11 +226,11 @@ TriangleMesh make_box(const Vec3& half_extents, int subdivisions) {
     const int u = (axis + 1) % 3;  // e_u × e_v = e_axis
     const int v = (axis + 2) % 3;
     for (int side = 0; side < 2; ++side) {  // − face, then + face
-      for (int i = 0; i < m; ++i) {
-        for (int j = 0; j < m; ++j) {
+      for (int i = 0; i < m[at(u)]; ++i) {
+        for (int j = 0; j < m[at(v)]; ++j) {
           auto corner = [&](int di, int dj) {
             std::array<int, 3> l{};
-            l[at(axis)] = side * m;
+            l[at(axis)] = side * m[at(axis)];
             l[at(u)] = i + di;
             l[at(v)] = j + dj;
             return vertex(l);

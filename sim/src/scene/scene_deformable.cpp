@@ -4,9 +4,11 @@
 #include "scene_deformable.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -53,6 +55,30 @@ int integer_in(const TomlTable& t, std::string_view key, int lo, int hi, int fal
     t.fail(key, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) +
                     "], got " + std::to_string(v));
   return static_cast<int>(v);
+}
+
+/// A box's `subdivisions`: one integer for every axis, or [x, y, z], each in [0, 256]
+/// (default 2). Fails at the key otherwise.
+std::array<int, 3> box_subdivisions(const TomlTable& t) {
+  constexpr int kMax = 256;
+  const toml::node* node = t.node("subdivisions");
+  if (node == nullptr || !node->is_array()) {
+    const int n = integer_in(t, "subdivisions", 0, kMax, 2);
+    return {n, n, n};
+  }
+  const std::vector<double> v = t.numbers("subdivisions", 3);
+  std::array<int, 3> n{};
+  for (std::size_t d = 0; d < 3; ++d) {
+    if (!(v[d] >= 0.0 && v[d] <= kMax && v[d] == std::floor(v[d]))) {
+      char value[32];
+      std::snprintf(value, sizeof value, "%g", v[d]);
+      t.fail("subdivisions", "must be an integer in [0, " + std::to_string(kMax) +
+                                 "] or three of them [x, y, z]; entry " + std::to_string(d) +
+                                 " is " + value);
+    }
+    n[d] = static_cast<int>(v[d]);
+  }
+  return n;
 }
 
 /// Index of the rigid component named by `body`: a [[body]] without spheres.
@@ -146,9 +172,9 @@ core::TriangleMesh parse_mesh(const TomlTable& t, const std::filesystem::path& s
     t.allow_only({NUMEN_DEFORMABLE_COMMON_KEYS, "half_extents", "subdivisions"});
     const Vec3 h = t.vec3("half_extents");
     if (!(h.minCoeff() > 0.0)) t.fail("half_extents", "must all be > 0");
-    const int n = integer_in(t, "subdivisions", 0, 256, 2);
-    const double side = n + 2.0;
-    check_node_count(t, "subdivisions", 6.0 * side * side - 12.0 * side + 8.0);
+    const std::array<int, 3> n = box_subdivisions(t);
+    check_node_count(t, "subdivisions",
+                     (n[0] + 2.0) * (n[1] + 2.0) * (n[2] + 2.0) - 1.0 * n[0] * n[1] * n[2]);
     return core::make_box(h, n);
   }
   // "obj" (the key's first name) and "file": any format the mesh reader takes.

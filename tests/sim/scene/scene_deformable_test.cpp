@@ -9,6 +9,7 @@
 #include <sys/sysmacros.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -458,6 +459,21 @@ tie_stiffness = 500.0
   EXPECT_EQ(m.num_nodes(), 12 + 58 + 26 + 4);
 }
 
+TEST(DeformableLoader, ABoxTakesItsSubdivisionsPerAxis) {
+  const std::string box =
+      "mesh = \"box\"\nhalf_extents = [0.012, 0.010, 0.004]\nsubdivisions = [23, 23, 2]";
+  TempDir dir;
+  const Scene s = load_scene(
+      dir.write("pad.toml", replace(kMiniNet, "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1", box)));
+  // (23 + 2)(23 + 2)(2 + 2) − 23·23·2 nodes: the suturing scene's pad.
+  EXPECT_EQ(s.model.nets[0].node_count, 25 * 25 * 4 - 23 * 23 * 2);
+  const numen::core::TriangleMesh mesh =
+      numen::core::make_box(Vec3(0.012, 0.010, 0.004), std::array<int, 3>{23, 23, 2});
+  EXPECT_EQ(mesh.num_vertices(), s.model.nets[0].node_count);
+  EXPECT_EQ(mesh.num_triangles(), 2 * mesh.num_vertices() - 4);  // closed, genus 0
+  EXPECT_EQ(s.model.nets[0].structural_count, 3 * mesh.num_vertices() - 6);
+}
+
 // ---------------------------------------------------------------- errors
 
 TEST(DeformableLoaderErrors, UnknownBody) {
@@ -577,6 +593,21 @@ TEST(DeformableLoaderErrors, BadNumbers) {
   expect_error_at(
       replace(kMiniNet, "tie_stiffness = 500.0", "tie_stiffness = 500.0\nnode_radius = -0.001"),
       "node_radius = ", "-0.001", "deformable[0].node_radius", "must be in");
+}
+
+TEST(DeformableLoaderErrors, BadBoxSubdivisionsAreLocated) {
+  const std::string box = "mesh = \"box\"\nhalf_extents = [0.012, 0.010, 0.004]\nsubdivisions = ";
+  const std::string ico = "mesh = \"icosphere\"\nradius = 0.01\nsubdivisions = 1";
+  expect_error_at(replace(kMiniNet, ico, box + "[23, 23]"), "subdivisions = [23, 23]", "[",
+                  "deformable[0].subdivisions", "expected 3 numbers");
+  expect_error_at(replace(kMiniNet, ico, box + "[23, -1, 2]"), "subdivisions = [23, -1, 2]", "[",
+                  "deformable[0].subdivisions", "entry 1 is -1");
+  expect_error_at(replace(kMiniNet, ico, box + "[23, 2.5, 2]"), "subdivisions = [23, 2.5, 2]", "[",
+                  "deformable[0].subdivisions", "entry 1 is 2.5");
+  expect_error_at(replace(kMiniNet, ico, box + "[256, 256, 256]"), "subdivisions = [256", "[",
+                  "deformable[0].subdivisions", "more than the 65536");
+  expect_error_at(replace(kMiniNet, ico, box + "257"), "subdivisions = 257", "257",
+                  "deformable[0].subdivisions", "[0, 256]");
 }
 
 TEST(DeformableLoaderErrors, MissingRequiredKeys) {

@@ -51,6 +51,15 @@ TriangleMesh make_capsule(double radius, double half_length, int segments, int r
 /// out of range give an empty mesh.
 TriangleMesh make_box(const Vec3& half_extents, int subdivisions);
 
+/// Box of `half_extents` (m, each > 0) centred at the origin with subdivisions per axis
+/// (x, y, z; each ≥ 0): the faces normal to axis a are grids of (n_u + 1) × (n_v + 1) quads
+/// over the two other axes, each split into two triangles, vertices shared along the box's
+/// edges: (n_x + 2)(n_y + 2)(n_z + 2) − n_x n_y n_z vertices. A thin pad whose top face alone
+/// is touched carries a fine top and bottom on a few rows of side (the suturing scene's pad,
+/// docs/suturing.md). Closed, manifold, outward winding. Arguments out of range give an empty
+/// mesh. make_box(h, n) is make_box(h, {n, n, n}), vertex for vertex.
+TriangleMesh make_box(const Vec3& half_extents, const std::array<int, 3>& subdivisions);
+
 /// Torus around z centred at the origin: tube of `minor_radius` (m, > 0) around the circle of
 /// `major_radius` (m, > minor_radius) in the xy plane; `segments` (≥ 3) vertices along that
 /// circle times `sides` (≥ 3) around the tube, 2·segments·sides triangles. Closed, manifold,
