@@ -113,12 +113,19 @@ TEST(NumenCli, PeakMemoryDoesNotDependOnTheControlPeriod) {
 TEST(NumenCli, PeakMemoryDoesNotGrowWithTheDuration) {
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const ChildResult a = run_child({kNumen, "run", kLattice, "--duration", "0.5"}, dir.path(), 120);
-  const ChildResult b = run_child({kNumen, "run", kLattice, "--duration", "8"}, dir.path(), 300);
-  ASSERT_EQ(a.status, 0) << a.out << a.err;
-  ASSERT_EQ(b.status, 0) << b.out << b.err;
-  std::printf("[   info   ] peak RSS: 0.5 s %ld KiB, 8 s %ld KiB\n", a.max_rss_kib, b.max_rss_kib);
-  EXPECT_LT(b.max_rss_kib - a.max_rss_kib, 2 * 1024);
+  // The least of two runs each: a run's peak varies by about 2 MiB from one run to the next on
+  // a loaded machine (2 220 KiB once under ctest -j2, with nothing kept per step), as threads
+  // touch their allocator arenas; growth with the duration shows in both.
+  long peak[2] = {0, 0};
+  const char* durations[2] = {"0.5", "8"};
+  for (int d = 0; d < 2; ++d)
+    for (int round = 0; round < 2; ++round) {
+      const ChildResult r = run_child({kNumen, "run", kLattice, "--duration", durations[d]}, dir.path(), 300);
+      ASSERT_EQ(r.status, 0) << r.out << r.err;
+      peak[d] = round == 0 ? r.max_rss_kib : std::min(peak[d], r.max_rss_kib);
+    }
+  std::printf("[   info   ] peak RSS (least of two runs): 0.5 s %ld KiB, 8 s %ld KiB\n", peak[0], peak[1]);
+  EXPECT_LT(peak[1] - peak[0], 2 * 1024);
 }
 
 // Defect 1: SIGTERM while the input loads (here a trajectory file that is a FIFO nobody writes:
