@@ -119,8 +119,8 @@ TEST(SuturingFigures, TwentyPassesWithTheirPathsPerturbedByTwoMillimetres) {
   // The issue asks 10 of 10 through within 1 mm of both marks; measured (docs/suturing.md, "The
   // suturing scene"): 12 of 20 through, 1 within 1 mm of both — a knot's 2 mm moves the needle's
   // entry by as much, and the jitter between knots shakes the needle in the tissue — and 6 diverge
-  // at or after the hand-over (both drivers' grips slip, the jaws stay closed on the needle and
-  // the tissue). Twenty seeds, because which of them diverge changes with anything in the scene:
+  // at or after the hand-over (the two perturbed paths disagree there: a grip slips or misses the
+  // wire, and the needle, held by closed jaws or the pad alone, passes 5 m/s). Twenty seeds, because which of them diverge changes with anything in the scene:
   // ten gave 1 and 4 diverged on two pads that diverge as often over thirty. What this checks is
   // that it does not get worse, and that no run tunnels.
   EXPECT_GE(through, 12);
