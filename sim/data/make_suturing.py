@@ -39,6 +39,10 @@ from make_peg_transfer import device_header, instrument  # noqa: E402  the peg t
 R = 0.026 / math.pi            # m, the arc's radius
 WIRE = 0.00035                 # m, the wire's radius
 PUNCTURE_FORCE = 1.0           # N: 3-0 taper needle through skin (docs/suturing.md, "The threshold")
+NEEDLE_MASS = 0.002            # kg: the needle's simulated mass, not the steel wire's 78 mg: a 78 mg
+                               # needle turns about its chord (I = 5e-10 kg m^2) far faster than a 1 ms
+                               # step resolves between jaws and tissue, and 10 of 40 perturbed passes
+                               # diverged; at 2 g none did (docs/suturing.md, "The needle's mass")
 
 # ---- the pad: a box net on an anchored core, its top at z = 0 (a finer top face than 2 mm: the
 # entry's material point is found on a triangle of it)
@@ -330,7 +334,7 @@ def scene(rng=None):
     out = [HEADER, f"""name = "suturing"
 description = "One suture pass through a tissue pad: the needle driven along its arc from an entry mark to an exit mark by one trocar needle driver, handed to the other, pulled through with its thread"
 dt = 0.001
-gravity = [0.0, 0.0, 0.0]   # the needle (78 mg) is held from the first period: no weight to carry
+gravity = [0.0, 0.0, 0.0]   # the needle is held from the first period: no weight to carry
 integrator = "implicit-euler"
 coupling = "god-object"
 duration = {duration:.3f}
@@ -381,6 +385,7 @@ material = "tissue"
 [[needle]]
 name = "needle"
 material = "steel"
+mass = {NEEDLE_MASS}   # kg: simulated (the wire's is 78 mg; docs/suturing.md, "The needle's mass")
 position = {vec(NEEDLE_P0)}
 orientation = {vec(NEEDLE_Q0)}
 puncture_force = {PUNCTURE_FORCE}
