@@ -2,7 +2,7 @@
 /// The suture thread (core/include/numen/core/thread.hpp): settings refused by name, stretch
 /// under end tension, a clamped cantilever against Euler–Bernoulli, the catenary, stability at
 /// three time steps, the tie to a light body, instrument contact without pass-through, an
-/// eyelet's friction, self contact, the break, a non-finite step rolled back and counted, the
+/// eyelet's friction, self contact (and a thread that never meets itself stepping as without it), the break, a non-finite step rolled back and counted, the
 /// stage plan, zero allocation.
 
 #include <gtest/gtest.h>
@@ -343,8 +343,41 @@ TEST(Thread, SelfContactKeepsStrandsApart) {
         }
     ASSERT_GT(dz, 0.0) << "step " << i << ": the upper strand went through the lower: nodes " << pa << " " << s.position[pa].transpose() << " and " << pb << " " << s.position[pb].transpose() << " self " << s.output.self_contacts;
     touching += s.output.self_contacts > 0;
+    if (s.output.self_contacts > 0) {
+      ASSERT_GE(s.output.iterations, 2) << "step " << i << ": its contacts need a second iterate";
+    }
   }
   EXPECT_GT(touching, 100);
+}
+
+// A thread with self contact on that never comes near itself steps exactly as it does with self
+// contact off: its pull at the end swings it sideways and settles, and where the first Newton
+// iterate has converged and no pair of its segments is a candidate, that iterate is the step (one
+// banded solve, not two).
+TEST(Thread, SelfContactWithoutCandidatesStepsAsWithoutIt) {
+  core::ThreadModel t;
+  t.segments = 100;
+  t.damping = 0.1;
+  core::Model with = test::thread_model(t);
+  t.self_contact = false;
+  core::Model without = test::thread_model(t);
+  ASSERT_TRUE(with.threads[0].self_contact);
+  core::Data a = core::make_data(with);
+  core::Data b = core::make_data(without);
+  a.threads[0].external_force.back() = Vec3(0.05, 0.02, 0.0);
+  b.threads[0].external_force.back() = a.threads[0].external_force.back();
+  int one_solve = 0;
+  for (int i = 0; i < 2000; ++i) {
+    core::step(with, a);
+    core::step(without, b);
+    ASSERT_EQ(a.threads[0].output.self_contacts, 0) << "step " << i;
+    ASSERT_EQ(a.threads[0].output.iterations, b.threads[0].output.iterations) << "step " << i;
+    for (std::size_t k = 0; k < a.threads[0].position.size(); ++k)
+      ASSERT_EQ(a.threads[0].position[k], b.threads[0].position[k]) << "step " << i << ", node " << k;
+    one_solve += a.threads[0].output.iterations == 1;
+  }
+  EXPECT_GT(one_solve, 1000) << "steps whose first iterate converged";
+  EXPECT_LT(one_solve, 2000) << "the swing's first steps take more than one";
 }
 
 // Pulled apart at 0.5 m/s past its break strain, the thread breaks once, says so, and stays finite.

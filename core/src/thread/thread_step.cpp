@@ -270,6 +270,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
   }
   sc.tie_delta = {Vec3::Zero(), Vec3::Zero()};
   bool ok = true;
+  bool swept = false;  // the self contact's candidates found (on the first iterate)
   for (int iteration = 0; iteration < kThreadNewtonIterations && ok; ++iteration) {
     for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
     band.clear();
@@ -288,7 +289,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
     for (int t = 0; t < sc.num_terms; ++t)
       add_point_term(st, v, sc.terms[static_cast<std::size_t>(t)], h, band);
     // Self contact from the second iteration on: its candidates swept to the first iterate.
-    if (iteration == 1 && th.self_contact) find_thread_self_pairs(th, st, x, sc);
+    if (iteration == 1 && th.self_contact && !swept) find_thread_self_pairs(th, st, x, sc);
     const int touching = iteration >= 1 && th.self_contact ? add_thread_self_contacts(model, th, x, v, sc, h, band) : 0;
     st.output.self_contacts = touching;
     ok = band.solve();
@@ -302,8 +303,17 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
     if (p0.dynamic) sc.tie_delta[0] += band.rhs[0];
     if (p1.dynamic) sc.tie_delta[1] += band.rhs[n + 1];
     if (!(largest < 1e300)) ok = false;  // not finite
+    const bool converged = h * std::sqrt(largest) < kThreadNewtonTolerance * th.rest_segment;
+    if (iteration == 0 && th.self_contact && converged) {
+      // The candidates the second iteration would sweep to this iterate, found now: with none,
+      // the converged first iterate is the step, as without self contact.
+      for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
+      find_thread_self_pairs(th, st, x, sc);
+      swept = true;
+      if (sc.num_self_pairs == 0) break;
+    }
     const bool self_checked = !th.self_contact || iteration >= 1;
-    if (self_checked && h * std::sqrt(largest) < kThreadNewtonTolerance * th.rest_segment) break;
+    if (self_checked && converged) break;
   }
   for (std::size_t i = 0; ok && i < n; ++i) {
     const Vec3 x1 = st.position[i] + h * v[i];
