@@ -1,6 +1,7 @@
 // An organ's surface contacts (core/src/net/net_surface.cpp; docs/organs.md, "Surface
 // contacts"): the tool's spheres against the organ's triangles through its node centres. The
-// geometry against an every-triangle reference (depth, normal, barycentric shares), a centre
+// geometry against an every-triangle reference (depth, normal, barycentric shares; one sphere,
+// and each sphere of a tool of twenty), a centre
 // below the surface pushed back out, a vertex or an edge shared by several triangles counted
 // once, the forces' split and their sum, the capacity overflow counted once
 // per triangle contact, and the shipped organ holding the jaws' small sphere at its surface
@@ -175,6 +176,63 @@ TEST(NetSurface, ContactsAgainstEveryTriangle) {
   EXPECT_GT(touching, 100);
   EXPECT_GT(inside, 10);
   EXPECT_GT(edges, 10);
+}
+
+TEST(NetSurface, EverySphereOfALongToolMeetsWhatTheReferenceFinds) {
+  // A tool of 20 spheres (2 mm, 3 mm apart along its x: more than one run of a body's spheres,
+  // net_surface.cpp's kSphereGroup) laid across a deformed icosphere organ (radius 20 mm) at
+  // random places and turns: each sphere's triangle contacts are reference()'s, in its order, and
+  // it has one more exactly where reference() has an edge or vertex point nearer than them.
+  constexpr int kSpheres = 20;
+  const double radius = 0.002;
+  core::Model m = numen::test::organ::organ_bodies(1e-3, core::CouplingMode::kDirect, radius, Vec3(0, 0, 0.05));
+  m.body_spheres.clear();
+  for (int i = 0; i < kSpheres; ++i)
+    m.body_spheres.push_back(core::Sphere{Vec3(0.003 * (i - 0.5 * (kSpheres - 1)), 0.0, 0.0), radius});
+  m.bodies[1].sphere_count = kSpheres;
+  const core::TriangleMesh mesh = core::make_icosphere(0.02, 3);
+  ASSERT_EQ(core::add_net(m, mesh, organ_net_settings(mesh, OrganParams{})), "");
+  ASSERT_EQ(core::finalize_model(m), "");
+  core::Data d = core::make_data(m);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (core::NodeState& n : d.nodes) n.position += 4e-4 * Vec3(u(rng), u(rng), u(rng));
+  int touching_spheres = 0, runs_touching = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    Vec3 dir(u(rng), u(rng), u(rng));
+    dir.normalize();
+    const Vec3 axis(u(rng), u(rng), u(rng));
+    d.bodies[1].orientation = core::Quat(Eigen::AngleAxisd(3.0 * u(rng), axis.normalized()));
+    detect(m, d, (0.02 + 0.003 * u(rng)) * dir);
+    std::array<bool, 3> run_touches{};
+    for (int sp = 0; sp < kSpheres; ++sp) {
+      const Vec3 centre = d.bodies[1].position + d.bodies[1].orientation * m.body_spheres[static_cast<std::size_t>(sp)].center;
+      const Reference ref = reference(m, d, centre, radius);
+      std::vector<std::pair<int, double>> got;  // one per contact: its first entry
+      for (int i = 0; i < d.num_node_contacts; ++i) {
+        const core::NodeContact& c = d.node_contacts[static_cast<std::size_t>(i)];
+        if (c.sphere_b != sp) continue;
+        if (i > 0) {
+          const core::NodeContact& p = d.node_contacts[static_cast<std::size_t>(i - 1)];
+          if (p.sphere_b == sp && p.face == c.face && p.position == c.position) continue;
+        }
+        got.emplace_back(c.face, c.depth);
+      }
+      const std::size_t expected = ref.faces.size() + (std::isfinite(ref.edge_distance) ? 1 : 0);
+      ASSERT_EQ(got.size(), expected) << "trial " << trial << ", sphere " << sp;
+      for (std::size_t k = 0; k < ref.faces.size(); ++k) {
+        EXPECT_EQ(got[k].first, ref.faces[k].first) << "trial " << trial << ", sphere " << sp;
+        EXPECT_NEAR(got[k].second, ref.faces[k].second, 1e-12) << "trial " << trial << ", sphere " << sp;
+      }
+      touching_spheres += expected > 0 ? 1 : 0;
+      run_touches[static_cast<std::size_t>(sp / 8)] = run_touches[static_cast<std::size_t>(sp / 8)] || expected > 0;
+    }
+    runs_touching += (run_touches[0] ? 1 : 0) + (run_touches[1] ? 1 : 0) + (run_touches[2] ? 1 : 0) > 1 ? 1 : 0;
+  }
+  std::printf("[surface] %d spheres touching over 200 placements, %d placements touching in more than one run\n",
+              touching_spheres, runs_touching);
+  EXPECT_GT(touching_spheres, 200);
+  EXPECT_GT(runs_touching, 20);
 }
 
 TEST(NetSurface, AVertexOrEdgeSharedByTrianglesIsOneContact) {

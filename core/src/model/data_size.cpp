@@ -73,7 +73,7 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.spring_low_begin, n.spring_slot, n.near_obstacles, n.obstacle_axis,
            n.obstacle_rotation, n.near_bodies, n.near_sphere_end, n.near_spheres, n.near_order, n.near_key,
            n.face_candidates, n.face_lo, n.face_hi, n.node_outcode, n.surface_candidates, n.surface_lo,
-           n.surface_hi, n.surface_sphere_mask, n.surface_face_slot, n.surface_face_stamp,
+           n.surface_hi, n.surface_sphere_mask, n.group_candidates, n.surface_face_slot, n.surface_face_stamp,
            n.surface_point_stamp, n.surface_position, n.surface_net_stamp, n.surface_net_torn,
            n.surface_cluster_stamp, n.surface_cluster_close, n.rest_count, n.rest_flags, n.pass_position,
            n.pass_velocity, n.still_flags, n.still_force, n.still_energy, n.active_nodes,

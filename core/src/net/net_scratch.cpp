@@ -145,6 +145,7 @@ void NetScratch::resize_contact_search(const Model& model, std::size_t n, std::s
   surface_lo.assign(fine, Vec3::Zero());
   surface_hi.assign(fine, Vec3::Zero());
   surface_sphere_mask.assign(fine, 0);
+  group_candidates.assign(std::max(faces, fine), 0);
   surface_face_slot.assign(n > 0 ? model.net_surface_faces.size() : 0, -1);
   surface_face_stamp.assign(n > 0 ? model.net_surface_faces.size() : 0, 0);
   surface_point_stamp.assign(n > 0 ? model.net_surface_points.size() : 0, 0);

@@ -72,8 +72,19 @@ constexpr std::uint64_t sphere_bit(int i) noexcept {
 /// With `mask` (the fine surface's candidates, NetScratch::surface_sphere_mask), sphere i meets
 /// only the candidates whose mask has its bit (sphere_bit(i)): the others ride on no net
 /// triangle within its reach, so they are out of its radius (the same contacts, fewer tests).
+/// A body's spheres go in runs of kSphereGroup: each run tests only the candidates whose bounds
+/// meet the run's bounds (its balls' boxes grown by kGroupSlack), in their order, into
+/// NetScratch::group_candidates — every candidate within a ball's radius of its centre, or
+/// within kSamePoint of a point inside the ball, is among them: the same contacts, fewer tests.
+/// Spheres of one body whose candidates are gathered together (collide_candidates()): a body's
+/// spheres are laid along it, so neighbours share their candidates.
+constexpr int kSphereGroup = 8;
+/// How much a run's bounds grow beyond its balls' boxes (m): above kSamePoint, so that every
+/// triangle through a point a ball holds stays a candidate.
+constexpr double kGroupSlack = 1e-6;
+
 template <typename Corner, typename Emit>
-void collide_candidates(const Model& model, const Data& data, const NetScratch& ns, int num_near,
+void collide_candidates(const Model& model, const Data& data, NetScratch& ns, int num_near,
                         int mat_net, int nc, const Vec3* flo, const Vec3* fhi,
                         const std::uint64_t* mask, Corner corner, Emit emit_contact,
                         NodeContactSink* primary) noexcept {
@@ -87,6 +98,8 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
     any = 0;
     for (int m = 0; m < nc; ++m) any |= mask[m];
   }
+  std::int32_t* group = ns.group_candidates.data();
+  int ng = 0;  // the current run's candidates, group[0, ng)
   int j = 0;
   for (int k = 0; k < num_near; ++k) {
     const int body = ns.near_bodies[static_cast<std::size_t>(k)];
@@ -96,6 +109,19 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(body)];
     const Vec3& com = data.bodies[static_cast<std::size_t>(body)].position;
     for (int i = begin; i < end; ++i) {
+      if ((i - begin) % kSphereGroup == 0) {  // a run starts: its candidates
+        const int run_end = std::min(end, i + kSphereGroup);
+        Vec3 glo = Vec3::Constant(collision_detail::kInf), ghi = Vec3::Constant(-collision_detail::kInf);
+        for (int g = i; g < run_end; ++g) {
+          if (!(any & sphere_bit(g))) continue;
+          const Vec3 e = Vec3::Constant(R[near[g]] + kGroupSlack);
+          glo = glo.cwiseMin(sw[near[g]] - e);
+          ghi = ghi.cwiseMax(sw[near[g]] + e);
+        }
+        ng = 0;
+        for (int m = 0; m < nc; ++m)
+          if (boxes_overlap(flo[m], fhi[m], glo, ghi)) group[ng++] = m;
+      }
       if (!(any & sphere_bit(i))) continue;
       const int s = near[i];
       const Vec3& centre = sw[s];
@@ -140,7 +166,8 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       int feature = kFace;
       Vec3 q = Vec3::Zero(), w = Vec3::Zero();
       const std::uint64_t bit = sphere_bit(i);
-      for (int m = 0; m < nc; ++m) {
+      for (int gi = 0; gi < ng; ++gi) {
+        const int m = group[gi];
         if (mask && !(mask[m] & bit)) continue;
         if (detail::box_distance2(centre, flo[m], fhi[m]) >= r * r) continue;
         const Vec3 &a = corner(m, 0), &b = corner(m, 1), &c = corner(m, 2);
@@ -174,7 +201,8 @@ void collide_candidates(const Model& model, const Data& data, const NetScratch& 
       }
       // The pseudo-normal at q: the angle-weighted normals of the triangles through q.
       Vec3 pn = Vec3::Zero();
-      for (int m = 0; m < nc; ++m) {
+      for (int gi = 0; gi < ng; ++gi) {
+        const int m = group[gi];
         if (m != best && detail::box_distance2(q, flo[m], fhi[m]) > kSamePoint2) continue;
         const Vec3 &a = corner(m, 0), &b = corner(m, 1), &c = corner(m, 2);
         int fm = kFace;

@@ -176,6 +176,9 @@ struct NetScratch {
   /// index from 63 on) comes within its radius plus the net's surface_reach of a net triangle
   /// the candidate rides on — the only spheres it can touch (net_surface.cpp).
   std::vector<std::uint64_t> surface_sphere_mask;
+  /// The candidates (indices into face_candidates or surface_candidates) whose bounds meet a run
+  /// of a body's spheres (net_surface.cpp, collide_candidates()); sized as the larger of the two.
+  std::vector<std::int32_t> group_candidates;
   /// Per fine triangle (global): its index among this call's candidates, −1 where the call
   /// rejected it (valid where surface_face_stamp is the call's).
   std::vector<std::int32_t> surface_face_slot;
