@@ -41,8 +41,8 @@ WIRE = 0.00035                 # m, the wire's radius
 PUNCTURE_FORCE = 1.0           # N: 3-0 taper needle through skin (docs/suturing.md, "The threshold")
 NEEDLE_MASS = 0.002            # kg: the needle's simulated mass, not the steel wire's 78 mg: a 78 mg
                                # needle turns about its chord (I = 5e-10 kg m^2) far faster than a 1 ms
-                               # step resolves between jaws and tissue, and 10 of 40 perturbed passes
-                               # diverged; at 2 g, 2 of 40 (docs/suturing.md, "The needle's mass")
+                               # step resolves between jaws and tissue (docs/suturing.md, "The suturing
+                               # scene": what diverged, and the two changes)
 
 # ---- the pad: a box net on an anchored core, its top at z = 0 (a finer top face than 2 mm: the
 # entry's material point is found on a triangle of it)
@@ -385,7 +385,7 @@ material = "tissue"
 [[needle]]
 name = "needle"
 material = "steel"
-mass = {NEEDLE_MASS}   # kg: simulated (the wire's is 78 mg; docs/suturing.md, "The needle's mass")
+mass = {NEEDLE_MASS}   # kg: simulated (the wire's is 78 mg; docs/suturing.md, "The suturing scene")
 position = {vec(NEEDLE_P0)}
 orientation = {vec(NEEDLE_Q0)}
 puncture_force = {PUNCTURE_FORCE}

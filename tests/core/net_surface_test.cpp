@@ -1,7 +1,7 @@
 // An organ's surface contacts (core/src/net/net_surface.cpp; docs/organs.md, "Surface
 // contacts"): the tool's spheres against the organ's triangles through its node centres. The
 // geometry against an every-triangle reference (depth, normal, barycentric shares; one sphere,
-// and each sphere of a tool of twenty), a centre
+// and each sphere of a tool of twenty), a triangle turned over keeping its rest side, a centre
 // below the surface pushed back out, a vertex or an edge shared by several triangles counted
 // once, the forces' split and their sum, the capacity overflow counted once
 // per triangle contact, and the shipped organ holding the jaws' small sphere at its surface
@@ -233,6 +233,35 @@ TEST(NetSurface, EverySphereOfALongToolMeetsWhatTheReferenceFinds) {
               touching_spheres, runs_touching);
   EXPECT_GT(touching_spheres, 200);
   EXPECT_GT(runs_touching, 20);
+}
+
+TEST(NetSurface, ATriangleTurnedOverKeepsItsRestSide) {
+  // A triangle whose two corners have traded places is the same triangle turned over: its
+  // normal points into the organ. A sphere 0.5 r outside it along its rest outward normal is
+  // still pushed out, by r − 0.5 r along that normal, not by 1.5 r into the organ
+  // (net_surface.cpp, kept_side()).
+  const double radius = 0.002;
+  const core::Model m = organ_with_tool(core::make_icosphere(0.02, 3), radius, Vec3(0, 0, 0.05));
+  core::Data d = core::make_data(m);
+  const int f = m.nets[0].face_begin + 7;
+  const auto& t = m.net_faces[static_cast<std::size_t>(f)];
+  const Vec3 a = d.nodes[static_cast<std::size_t>(t[0])].position;
+  const Vec3 b = d.nodes[static_cast<std::size_t>(t[1])].position;
+  const Vec3 c = d.nodes[static_cast<std::size_t>(t[2])].position;
+  const Vec3 outward = (b - a).cross(c - a).normalized();
+  const Vec3 centroid = (a + b + c) / 3.0;
+  ASSERT_GT(outward.dot(centroid - d.bodies[0].position), 0.0) << "wound outward at rest";
+  std::swap(d.nodes[static_cast<std::size_t>(t[1])].position, d.nodes[static_cast<std::size_t>(t[2])].position);
+  detect(m, d, centroid + 0.5 * radius * outward);
+  int entries = 0;
+  for (int i = 0; i < d.num_node_contacts; ++i) {
+    const core::NodeContact& ct = d.node_contacts[static_cast<std::size_t>(i)];
+    if (ct.face != f) continue;
+    ++entries;
+    EXPECT_NEAR(ct.normal.dot(outward), -1.0, 1e-12) << "from the tool into the organ";
+    EXPECT_NEAR(ct.depth, 0.5 * radius, 1e-12);
+  }
+  EXPECT_EQ(entries, 3) << "the triangle's contact, one entry a node";
 }
 
 TEST(NetSurface, AVertexOrEdgeSharedByTrianglesIsOneContact) {

@@ -57,6 +57,15 @@ double angle_at(int f, const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
   }
 }
 
+/// The outward unit normal `o` of a triangle, or its rest normal's direction where the triangle
+/// has turned over (o more than 90° from `rest`, its normal at rest carried by the net's body):
+/// a triangle folded round a tool's sphere turns its normal from one step to the next, and the
+/// contacts along it threw the suturing pad's nodes past 5 m/s (docs/organs.md, "Surface
+/// contacts"). A zero `rest` keeps o.
+inline Vec3 kept_side(const Vec3& o, const Vec3& rest) noexcept {
+  return rest.dot(o) < 0.0 ? Vec3(rest.normalized()) : o;
+}
+
 /// Near sphere i's bit in NetScratch::surface_sphere_mask (bit 63 for every i ≥ 63).
 constexpr std::uint64_t sphere_bit(int i) noexcept {
   return std::uint64_t{1} << (i < 63 ? i : 63);
@@ -72,6 +81,8 @@ constexpr std::uint64_t sphere_bit(int i) noexcept {
 /// With `mask` (the fine surface's candidates, NetScratch::surface_sphere_mask), sphere i meets
 /// only the candidates whose mask has its bit (sphere_bit(i)): the others ride on no net
 /// triangle within its reach, so they are out of its radius (the same contacts, fewer tests).
+/// `rest_normal(m)`: candidate m's normal at rest, carried by the net's body (any length; zero
+/// where there is none to keep): a triangle turned over keeps its rest side (kept_side()).
 /// A body's spheres go in runs of kSphereGroup: each run tests only the candidates whose bounds
 /// meet the run's bounds (its balls' boxes grown by kGroupSlack), in their order, into
 /// NetScratch::group_candidates — every candidate within a ball's radius of its centre, or
@@ -83,11 +94,11 @@ constexpr int kSphereGroup = 8;
 /// triangle through a point a ball holds stays a candidate.
 constexpr double kGroupSlack = 1e-6;
 
-template <typename Corner, typename Emit>
+template <typename Corner, typename Emit, typename RestNormal>
 void collide_candidates(const Model& model, const Data& data, NetScratch& ns, int num_near,
                         int mat_net, int nc, const Vec3* flo, const Vec3* fhi,
                         const std::uint64_t* mask, Corner corner, Emit emit_contact,
-                        NodeContactSink* primary) noexcept {
+                        NodeContactSink* primary, RestNormal rest_normal) noexcept {
   const CollisionScratch& cs = data.scratch->collision;
   const double* R = cs.sphere_r.data();
   const Vec3* sw = cs.sphere_world.data();
@@ -180,7 +191,7 @@ void collide_candidates(const Model& model, const Data& data, NetScratch& ns, in
           const Vec3 n = (b - a).cross(c - a);
           const double len = n.norm();
           if (!(len > 0.0)) continue;
-          const Vec3 o = n / len;  // outward
+          const Vec3 o = kept_side(n / len, rest_normal(m));  // outward
           ContactGeometry g;
           g.depth = r - o.dot(centre - qm);
           g.normal = -o;
@@ -212,7 +223,12 @@ void collide_candidates(const Model& model, const Data& data, NetScratch& ns, in
         if ((qm - q).squaredNorm() > kSamePoint2) continue;
         const Vec3 n = (b - a).cross(c - a);
         const double len = n.norm();
-        if (len > 0.0) pn += (angle_at(fm, a, b, c) / len) * n;
+        if (!(len > 0.0)) continue;
+        const Vec3 rest = rest_normal(m);
+        if (rest.dot(n) < 0.0)  // turned over: its rest side (kept_side())
+          pn += angle_at(fm, a, b, c) * rest.normalized();
+        else
+          pn += (angle_at(fm, a, b, c) / len) * n;
       }
       const Vec3 diff = centre - q;
       const double d = std::sqrt(best2);
@@ -577,7 +593,8 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
                             body, sphere, material_pair, g, com);
     };
     collide_candidates(model, data, ns, num_near, mat_net, nc, ns.surface_lo.data(),
-                       ns.surface_hi.data(), ns.surface_sphere_mask.data(), corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr);
+                       ns.surface_hi.data(), ns.surface_sphere_mask.data(), corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr,
+                       [](int) { return Vec3::Zero(); });
     return;
   }
 
@@ -606,8 +623,14 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
     sink.add_face(cand[m], model.net_faces[static_cast<std::size_t>(cand[m])], w, body, sphere,
                   material_pair, g, com);
   };
+  const Quat& q_net = data.bodies[static_cast<std::size_t>(net.body)].orientation;
+  const auto rest_normal = [&](int m) -> Vec3 {
+    const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(cand[m])];
+    const Vec3& ra = model.node_rest[static_cast<std::size_t>(t[0])];
+    return q_net * (model.node_rest[static_cast<std::size_t>(t[1])] - ra).cross(model.node_rest[static_cast<std::size_t>(t[2])] - ra);
+  };
   collide_candidates(model, data, ns, num_near, mat_net, nc, ns.face_lo.data(), ns.face_hi.data(),
-                     nullptr, corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr);
+                     nullptr, corner, emit, net.contact_modulus > 0.0 ? &sink : nullptr, rest_normal);
 }
 
 }  // namespace numen::core::detail
