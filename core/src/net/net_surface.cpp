@@ -71,6 +71,13 @@ constexpr std::uint64_t sphere_bit(int i) noexcept {
   return std::uint64_t{1} << (i < 63 ? i : 63);
 }
 
+/// Spheres of one body whose candidates are gathered together (collide_candidates()): a body's
+/// spheres are laid along it, so neighbours share their candidates.
+constexpr int kSphereGroup = 8;
+/// How much a run's bounds grow beyond its balls' boxes (m): above kSamePoint, so that every
+/// triangle through a point a ball holds stays a candidate.
+constexpr double kGroupSlack = 1e-6;
+
 /// The near spheres (NetScratch::near_*) against the `nc` candidate triangles of bounds
 /// [flo, fhi]: `corner(m, k)` is corner k of candidate m at the current positions,
 /// `emit(m, w, body, sphere, material_pair, geometry, com)` writes a contact at the point of
@@ -87,13 +94,6 @@ constexpr std::uint64_t sphere_bit(int i) noexcept {
 /// meet the run's bounds (its balls' boxes grown by kGroupSlack), in their order, into
 /// NetScratch::group_candidates — every candidate within a ball's radius of its centre, or
 /// within kSamePoint of a point inside the ball, is among them: the same contacts, fewer tests.
-/// Spheres of one body whose candidates are gathered together (collide_candidates()): a body's
-/// spheres are laid along it, so neighbours share their candidates.
-constexpr int kSphereGroup = 8;
-/// How much a run's bounds grow beyond its balls' boxes (m): above kSamePoint, so that every
-/// triangle through a point a ball holds stays a candidate.
-constexpr double kGroupSlack = 1e-6;
-
 template <typename Corner, typename Emit, typename RestNormal>
 void collide_candidates(const Model& model, const Data& data, NetScratch& ns, int num_near,
                         int mat_net, int nc, const Vec3* flo, const Vec3* fhi,

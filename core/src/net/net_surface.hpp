@@ -32,7 +32,10 @@ namespace detail {
 /// when nearer than every such triangle: one more, o = ±(c − q)/d, outside or inside from the
 /// angle-weighted pseudo-normal at q of the triangles that share it (Bærentzen & Aanæs 2005),
 /// depth r ∓ d. Normal −o (from the tool's sphere into the organ), position the middle of the
-/// overlap ½ (q + c − r o). `mat_net`: the net's row of Model::material_pairs.
+/// overlap ½ (q + c − r o). A net triangle turned over (its normal more than 90° from its rest
+/// normal, carried by the net's body) counts with its rest normal instead, here and in the
+/// pseudo-normal (docs/organs.md, "Surface contacts"). `mat_net`: the net's row of
+/// Model::material_pairs.
 ///
 /// A net with a fine surface (NetModel::surface_face_count > 0, net_surface_map.hpp) meets the
 /// spheres with the fine triangles instead, by the same tests: the candidates are the fine
