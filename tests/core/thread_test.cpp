@@ -2,8 +2,8 @@
 /// The suture thread (core/include/numen/core/thread.hpp): settings refused by name, stretch
 /// under end tension, a clamped cantilever against Euler–Bernoulli, the catenary, stability at
 /// three time steps, the tie to a light body, instrument contact without pass-through, an
-/// eyelet's friction, self contact (and a thread that never meets itself stepping as without it), the break, a non-finite step rolled back and counted, the
-/// stage plan, zero allocation.
+/// eyelet's friction, self contact (and a thread that never meets itself stepping as without
+/// it), the break, a non-finite step rolled back and counted, the stage plan, zero allocation.
 
 #include <gtest/gtest.h>
 
