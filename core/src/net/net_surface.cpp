@@ -57,13 +57,16 @@ double angle_at(int f, const Vec3& a, const Vec3& b, const Vec3& c) noexcept {
   }
 }
 
-/// The outward unit normal `o` of a triangle, or its rest normal's direction where the triangle
-/// has turned over (o more than 90° from `rest`, its normal at rest carried by the net's body):
-/// a triangle folded round a tool's sphere turns its normal from one step to the next, and the
-/// contacts along it threw the suturing pad's nodes past 5 m/s (docs/organs.md, "Surface
-/// contacts"). A zero `rest` keeps o.
+/// Whether a triangle of normal `n` (any length) has turned over: n more than 90° from `rest`,
+/// its normal at rest carried by the net's body (any length; zero: never).
+inline bool turned_over(const Vec3& n, const Vec3& rest) noexcept { return rest.dot(n) < 0.0; }
+
+/// The outward unit normal `o` of a triangle, or its rest normal's direction where it has turned
+/// over (turned_over()): a triangle folded round a tool's sphere turns its normal from one step
+/// to the next, and the contacts along it threw the suturing pad's nodes past 5 m/s
+/// (docs/organs.md, "Surface contacts").
 inline Vec3 kept_side(const Vec3& o, const Vec3& rest) noexcept {
-  return rest.dot(o) < 0.0 ? Vec3(rest.normalized()) : o;
+  return turned_over(o, rest) ? Vec3(rest.normalized()) : o;
 }
 
 /// Near sphere i's bit in NetScratch::surface_sphere_mask (bit 63 for every i ≥ 63).
@@ -123,14 +126,16 @@ void collide_candidates(const Model& model, const Data& data, NetScratch& ns, in
       if ((i - begin) % kSphereGroup == 0) {  // a run starts: its candidates
         const int run_end = std::min(end, i + kSphereGroup);
         Vec3 glo = Vec3::Constant(collision_detail::kInf), ghi = Vec3::Constant(-collision_detail::kInf);
+        bool live = false;  // a sphere of the run some candidate can touch
         for (int g = i; g < run_end; ++g) {
           if (!(any & sphere_bit(g))) continue;
           const Vec3 e = Vec3::Constant(R[near[g]] + kGroupSlack);
           glo = glo.cwiseMin(sw[near[g]] - e);
           ghi = ghi.cwiseMax(sw[near[g]] + e);
+          live = true;
         }
         ng = 0;
-        for (int m = 0; m < nc; ++m)
+        for (int m = 0; live && m < nc; ++m)
           if (boxes_overlap(flo[m], fhi[m], glo, ghi)) group[ng++] = m;
       }
       if (!(any & sphere_bit(i))) continue;
@@ -225,7 +230,7 @@ void collide_candidates(const Model& model, const Data& data, NetScratch& ns, in
         const double len = n.norm();
         if (!(len > 0.0)) continue;
         const Vec3 rest = rest_normal(m);
-        if (rest.dot(n) < 0.0)  // turned over: its rest side (kept_side())
+        if (turned_over(n, rest))  // its rest side (kept_side())
           pn += angle_at(fm, a, b, c) * rest.normalized();
         else
           pn += (angle_at(fm, a, b, c) / len) * n;
