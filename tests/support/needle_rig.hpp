@@ -6,12 +6,16 @@
 /// travels along its arc). Header-only; needs numen::core and the test support.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "numen/core/model.hpp"
 #include "numen/core/needle.hpp"
+#include "numen/core/net_material.hpp"
 #include "numen/core/data.hpp"
 #include "organ_indentation.hpp"
 #include "rotation.hpp"
@@ -64,6 +68,109 @@ inline core::Model puncture_rig(double threshold = kPunctureThreshold, double ma
   if (finalize) {
     EXPECT_EQ(core::finalize_model(m), "");
   }
+  return m;
+}
+
+/// A 2n h × 2n h × d h slab of tissue (m; its top face at z = 0, centred on the z axis) as a
+/// tetrahedral mesh: a grid of cubes of edge h, each split into six tetrahedra about its
+/// diagonal (Kuhn), its boundary's squares split into two triangles along the same diagonals
+/// (from a square's lowest corner to its highest), wound outward; boundary nodes first.
+inline core::TetrahedralMesh material_slab(int n, int d, double h) {
+  const int nx = 2 * n + 1, nz = d + 1;
+  const auto id = [&](int i, int j, int k) { return (k * nx + j) * nx + i; };
+  const auto at = [&](int i, int j, int k) { return core::Vec3((i - n) * h, (j - n) * h, (k - d) * h); };
+  const auto boundary = [&](int i, int j, int k) {
+    return i == 0 || j == 0 || k == 0 || i == nx - 1 || j == nx - 1 || k == nz - 1;
+  };
+  core::TetrahedralMesh m;
+  std::vector<int> index(static_cast<std::size_t>(nx * nx * nz), -1);
+  for (int pass = 0; pass < 2; ++pass)
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < nx; ++j)
+        for (int i = 0; i < nx; ++i) {
+          if (boundary(i, j, k) != (pass == 0)) continue;
+          if (pass == 0) {
+            index[static_cast<std::size_t>(id(i, j, k))] = m.surface.num_vertices();
+            m.surface.vertices.push_back(at(i, j, k));
+          } else {
+            index[static_cast<std::size_t>(id(i, j, k))] =
+                static_cast<int>(m.surface.vertices.size() + m.interior.size());
+            m.interior.push_back(at(i, j, k));
+          }
+        }
+  const auto node = [&](int i, int j, int k) { return index[static_cast<std::size_t>(id(i, j, k))]; };
+  // Kuhn: the path 000 → e_a → e_a + e_b → 111 for each order (a, b, c) of the axes.
+  const int orders[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  for (int k = 0; k + 1 < nz; ++k)
+    for (int j = 0; j + 1 < nx; ++j)
+      for (int i = 0; i + 1 < nx; ++i)
+        for (const auto& o : orders) {
+          int c[3] = {i, j, k};
+          std::array<int, 4> t{};
+          t[0] = node(c[0], c[1], c[2]);
+          for (int s = 0; s < 3; ++s) {
+            ++c[o[s]];
+            t[static_cast<std::size_t>(s + 1)] = node(c[0], c[1], c[2]);
+          }
+          m.tetrahedra.push_back(t);
+        }
+  // The boundary's squares: axis `a` normal, at the grid's side `side`.
+  const int size[3] = {nx, nx, nz};
+  for (int a = 0; a < 3; ++a)
+    for (int side = 0; side < 2; ++side) {
+      const int u = (a + 1) % 3, v = (a + 2) % 3;
+      for (int p = 0; p + 1 < size[u]; ++p)
+        for (int q = 0; q + 1 < size[v]; ++q) {
+          const auto corner = [&](int du, int dv) {
+            int c[3];
+            c[a] = side == 0 ? 0 : size[a] - 1;
+            c[u] = p + du;
+            c[v] = q + dv;
+            return node(c[0], c[1], c[2]);
+          };
+          const int lo = corner(0, 0), b = corner(1, 0), hi = corner(1, 1), e = corner(0, 1);
+          core::Vec3 out = core::Vec3::Zero();
+          out[a] = side == 0 ? -1.0 : 1.0;
+          for (const std::array<int, 3>& t0 : {std::array<int, 3>{lo, b, hi}, std::array<int, 3>{lo, hi, e}}) {
+            std::array<int, 3> t = t0;
+            const core::Vec3& x0 = m.surface.vertices[static_cast<std::size_t>(t[0])];
+            const core::Vec3 nrm = (m.surface.vertices[static_cast<std::size_t>(t[1])] - x0)
+                                       .cross(m.surface.vertices[static_cast<std::size_t>(t[2])] - x0);
+            if (nrm.dot(out) < 0.0) std::swap(t[1], t[2]);
+            m.surface.triangles.push_back(t);
+          }
+        }
+    }
+  return m;
+}
+
+/// puncture_rig() with the patch given by its material instead (core::add_material_net()): a
+/// material_slab(7, 4, 2 mm) — 28 × 28 mm, 8 mm deep, its top at z = 0 where the patch is —
+/// of E = 120 kPa, ν = 0.45, ρ = 1000 kg/m³, β = 1 ms, ℓ = 8 mm (docs/tissue.md).
+inline core::Model puncture_rig_material(double threshold = kPunctureThreshold) {
+  core::Model m = organ::patch_rig_start();
+  core::MaterialNetSettings s;
+  s.name = "organ";
+  s.body = 0;
+  s.material = 1;
+  s.tissue.youngs_modulus = 120e3;
+  s.tissue.poisson_ratio = 0.45;
+  s.tissue.density = 1000.0;
+  s.tissue.rayleigh_stiffness = 1e-3;
+  s.tissue.support_length = 0.008;
+  EXPECT_EQ(core::add_material_net(m, material_slab(7, 4, 0.002), s), "");
+  core::NeedleSpec spec;
+  spec.name = "needle";
+  spec.puncture_force = threshold;
+  core::add_needle(m, spec);
+  core::NeedleModel& n = m.needles[0];
+  m.bodies[1].initial_pose = puncture_needle_pose(n, core::Vec3(0, 0, n.radius / 2), -10 * kPunctureDeg);
+  const double mass = m.bodies[1].mass, inertia = m.bodies[1].inertia_body(2, 2);
+  m.bodies[1].coupling = core::CouplingGains{500.0, core::damping_from_ratio(0.85, mass, 500.0), 0.05,
+                                             core::damping_from_ratio(0.85, inertia, 0.05)};
+  m.feedback = core::FeedbackGains{500.0, m.bodies[1].coupling.gamma_t, 0.05, m.bodies[1].coupling.gamma_r};
+  m.initial_held_body = 1;
+  EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
 

@@ -50,6 +50,7 @@ int add_needle(Model& model, const NeedleSpec& spec) {
   b.mass = std::isnan(spec.mass) ? needle_steel_mass(spec.radius, spec.arc, spec.wire_radius) : spec.mass;
   b.material = spec.material;
   b.initial_pose = spec.pose;
+  b.sharp = true;  // its tip cuts: an organ given by its material meets it by the pair's penalty
   // A thin arc about the circle's centre: ∫x² = m R² (1/2 + sin 2α / 4α), ∫y² = m R² (1/2 − sin 2α / 4α);
   // about the centroid, ∫x'² = ∫x² − m x̄². Plus the wire's own section, m r_w² / 2 (kept on
   // every axis: an upper bound on its ≤ m r_w² / 2 contribution).

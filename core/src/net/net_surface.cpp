@@ -85,9 +85,10 @@ constexpr double kGroupSlack = 1e-6;
 /// [flo, fhi]: `corner(m, k)` is corner k of candidate m at the current positions,
 /// `emit(m, w, body, sphere, material_pair, geometry, com)` writes a contact at the point of
 /// barycentric weights w of candidate m (net_surface.hpp, collide_net_faces()).
-/// With `primary` (the sink, for an organ given by its material: NetModel::contact_modulus), the
+/// With `tissue` (the sink, for an organ given by its material: NetModel::contact_modulus), the
 /// entries of each sphere's deepest contact are marked NodeContact::primary: the two-scale law
-/// (net_tissue_contact.hpp) is the whole sphere's and acts there.
+/// (net_tissue_contact.hpp) is the whole sphere's and acts there — but for a sharp body's
+/// (BodyModel::sharp), whose contacts are the pair's penalty.
 /// With `mask` (the fine surface's candidates, NetScratch::surface_sphere_mask), sphere i meets
 /// only the candidates whose mask has its bit (sphere_bit(i)): the others ride on no net
 /// triangle within its reach, so they are out of its radius (the same contacts, fewer tests).
@@ -101,7 +102,7 @@ template <typename Corner, typename Emit, typename RestNormal>
 void collide_candidates(const Model& model, const Data& data, NetScratch& ns, int num_near,
                         int mat_net, int nc, const Vec3* flo, const Vec3* fhi,
                         const std::uint64_t* mask, Corner corner, Emit emit_contact,
-                        NodeContactSink* primary, RestNormal rest_normal) noexcept {
+                        NodeContactSink* tissue, RestNormal rest_normal) noexcept {
   const CollisionScratch& cs = data.scratch->collision;
   const double* R = cs.sphere_r.data();
   const Vec3* sw = cs.sphere_world.data();
@@ -122,6 +123,8 @@ void collide_candidates(const Model& model, const Data& data, NetScratch& ns, in
     j = end;
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(body)];
     const Vec3& com = data.bodies[static_cast<std::size_t>(body)].position;
+    // A sharp body (a needle) meets the organ through the pair's penalty: no primary contact.
+    NodeContactSink* const primary = bm.sharp ? nullptr : tissue;
     for (int i = begin; i < end; ++i) {
       if ((i - begin) % kSphereGroup == 0) {  // a run starts: its candidates
         const int run_end = std::min(end, i + kSphereGroup);

@@ -170,6 +170,7 @@ bool patch_plane(const Model& model, const Data& data, NetScratch& s, const NetM
 // (net_tissue.hpp)
 const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept {
   if (ct.face < 0 || ct.body_b < 0 || ct.sphere_b < 0) return nullptr;
+  if (model.bodies[static_cast<std::size_t>(ct.body_b)].sharp) return nullptr;  // the pair's penalty
   const NetModel& net = model.nets[static_cast<std::size_t>(model.node_net[static_cast<std::size_t>(ct.node)])];
   return net.contact_modulus > 0.0 ? &net : nullptr;
 }

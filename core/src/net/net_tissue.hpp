@@ -25,7 +25,8 @@ inline bool same_contact(const NodeContact& a, const NodeContact& b) noexcept {
 }
 
 /// The net of an organ given by its material whose surface node contact `ct` is (a tool's
-/// sphere on its surface: the two-scale law of net_tissue_contact.hpp), else null.
+/// sphere on its surface: the two-scale law of net_tissue_contact.hpp), else null — null also
+/// for a sharp body's sphere (BodyModel::sharp: the pair's penalty).
 const NetModel* tissue_net(const Model& model, const NodeContact& ct) noexcept;
 
 /// The two-scale law (net_tissue_contact.hpp) of the tissue contact `ct` on `net`, with the

@@ -114,6 +114,13 @@ struct BodyModel {
   int mesh = -1;
   /// Pose of the mesh's frame in the body frame (origin at the COM; m).
   Pose mesh_pose;
+  /// A cutting body (a needle: add_needle() sets it). It meets an organ given by its material
+  /// (NetModel::contact_modulus > 0) as it meets a net given per spring — the material pair's
+  /// penalty on the touched triangle's nodes — not through the two-scale law
+  /// (net_tissue_contact.hpp), whose half-space is pressed by a blunt sphere: a 0.35 mm wire's
+  /// tip pressed to a 1 N puncture (docs/suturing.md) would be about 4 mm, twelve of its radii,
+  /// into a 120 kPa tissue (Hertz), where the net cannot wrap it.
+  bool sharp = false;
 };
 
 /// Shape of a static obstacle.
