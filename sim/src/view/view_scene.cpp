@@ -170,6 +170,8 @@ std::string view_scene_message(const Scene& scene, const platform::StateFrameLay
                {"node_radius", radius},
                {"triangles", std::move(triangles)}};
     if (json surface = net_surface(m, net); !surface.is_null()) entry["surface"] = std::move(surface);
+    // An organ given by its material: the page draws the tools' dimples on it (tissue_dimple.js).
+    if (net.contact_modulus > 0.0) entry["tissue"] = true;
     nets.push_back(std::move(entry));
   }
   json joints = json::array();

@@ -14,11 +14,13 @@ export function hasFineSurface(n) {
   return !!(n.surface && n.surface.triangles && n.surface.face);
 }
 
-/// The fine surface of net entry `n` (hasFineSurface(n)) as { geo, update(x) }: geo, its
+/// The fine surface of net entry `n` (hasFineSurface(n)) as { geo, update(x, press) }: geo, its
 /// BufferGeometry (positions and normals, index of the fine triangles); update(x) places its
 /// vertices and normals for the frame's node positions `x` (Float32Array, 3 per node, the net's
-/// nodes from index 0) and marks them for upload. Throws if the arrays disagree in size or
-/// index out of range (the message is malformed).
+/// nodes from index 0) and marks them for upload; with `press(pos, nor, count)` (the tools'
+/// dimples, tissue_dimple.js) the placed vertices are handed to it with their normals, and the
+/// normals made again where it moved any. Throws if the arrays disagree in size or index out of
+/// range (the message is malformed).
 export function fineSurface(n) {
   const s = n.surface, V = s.point_count, T = s.triangle_count;
   const nt = Int32Array.from(s.net_triangles), F = nt.length / 3;
@@ -42,7 +44,7 @@ export function fineSurface(n) {
   const frame = new Float64Array(9 * F);  // per net triangle: e1, e2, n; NaN: collapsed
   const acc = new Float64Array(3 * V);    // area-weighted normal sums
 
-  function update(x) {
+  function update(x, press) {
     for (let f = 0; f < F; ++f) {
       const a = 3 * nt[3 * f], b = 3 * nt[3 * f + 1], c = 3 * nt[3 * f + 2];
       const ux = x[b] - x[a], uy = x[b + 1] - x[a + 1], uz = x[b + 2] - x[a + 2];
@@ -74,7 +76,15 @@ export function fineSurface(n) {
       }
       pos[i3] = px; pos[i3 + 1] = py; pos[i3 + 2] = pz;
     }
-    // Vertex normals: the sum of the incident triangles' area vectors, normalised.
+    normals();
+    if (press && press(pos, nor, V) > 0) normals();
+    geo.attributes.position.needsUpdate = true;
+    geo.attributes.normal.needsUpdate = true;
+    geo.computeBoundingSphere();
+  }
+
+  /// Vertex normals: the sum of the incident triangles' area vectors, normalised.
+  function normals() {
     acc.fill(0);
     for (let t = 0; t < tri.length; t += 3) {
       const a = 3 * tri[t], b = 3 * tri[t + 1], c = 3 * tri[t + 2];
@@ -89,9 +99,6 @@ export function fineSurface(n) {
       const l = Math.sqrt(acc[k] * acc[k] + acc[k + 1] * acc[k + 1] + acc[k + 2] * acc[k + 2]) || 1;
       nor[k] = acc[k] / l; nor[k + 1] = acc[k + 1] / l; nor[k + 2] = acc[k + 2] / l;
     }
-    geo.attributes.position.needsUpdate = true;
-    geo.attributes.normal.needsUpdate = true;
-    geo.computeBoundingSphere();
   }
   return { geo, update };
 }

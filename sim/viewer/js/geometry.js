@@ -5,6 +5,7 @@ import { scene3, v3, q } from './stage.js';
 import { FLOATS } from './protocol.js';
 import { hasFineSurface, fineSurface } from './fine_surface.js';
 import { needleGeometry, needleOf } from './suture.js';
+import { pressDimples } from './tissue_dimple.js';
 
 /// Colours of what is drawn (the legend's too).
 export const COLORS = { tool: 0xff8800, body: 0x9aa4b0, held: 0xd040d0, ghost: 0x00c8ff, obstacle: 0xc0504d,
@@ -154,14 +155,17 @@ export function showCoarseNets(on) {
 }
 
 /// What buildScene() made: one entry per body (its group and its ghost), net and joint; a net's
-/// entry { net, obj, geo, fine, fineObj }: its node geometry and what draws it (obj: its
-/// triangles, or points without any; a wireframe under a fine surface), and its fine surface
-/// (fine_surface.js, null without one) and that surface's mesh.
-export const G = { bodies: [], ghosts: [], nets: [], jointAxes: [], obstacleBox: new THREE.Box3() };
+/// entry { net, obj, geo, fine, fineObj, moves, dimpleMove }: its node geometry and what draws it (obj: its
+/// triangles, or points without any; a wireframe under a fine surface), its fine surface
+/// (fine_surface.js, null without one) and that surface's mesh, and for an organ given by its
+/// material (the entry's `tissue`) the dimples' scratch (tissue_dimple.js; null otherwise) and
+/// the largest move they made in the frame drawn (m); bodySpheres, each body's spheres ([x, y, z, r] in its frame).
+export const G = { bodies: [], ghosts: [], nets: [], jointAxes: [], obstacleBox: new THREE.Box3(), bodySpheres: [] };
 
 /// Builds the static world of the scene message `msg`.
 export function buildScene(msg) {
   if (msg.format !== 'numen-view') throw new Error('not a numen-view scene message');
+  G.bodySpheres = msg.bodies.map((b) => b.spheres);
   const box = G.obstacleBox;
   for (const o of msg.obstacles) {
     let obj;
@@ -237,7 +241,9 @@ export function buildScene(msg) {
     }
     obj.frustumCulled = false;
     scene3.add(obj);
-    G.nets.push({ net: n, obj, geo, fine, fineObj });
+    // An organ given by its material: the tools' dimples drawn on it (tissue_dimple.js).
+    const moves = n.tissue ? new Float64Array(fine ? n.surface.point_count : n.node_count) : null;
+    G.nets.push({ net: n, obj, geo, fine, fineObj, moves });
   }
   for (const j of msg.joints) {
     const a = new THREE.AxesHelper(1);
@@ -302,15 +308,38 @@ export function showBodies(fr) {
     G.ghosts[b].quaternion.set(t[3], t[4], t[5], t[6]);
     G.bodies[b].userData.material.color.setHex(b === h.attached_body ? COLORS.tool : held.has(b) ? COLORS.held : COLORS.body);
   }
-  for (const { net, geo, fine } of G.nets) {
+  let spheres = null;  // the bodies' spheres in the world, for the organs given by their material
+  for (const entry of G.nets) {
+    const { net, geo, fine, moves } = entry;
     const pos = geo.attributes.position.array;
     const N = FLOATS.node_position;
     pos.set(fr.node_position.subarray(N * net.node_begin, N * (net.node_begin + net.node_count)));
     geo.attributes.position.needsUpdate = true;
-    if (fine) fine.update(pos);  // the net is then a wireframe: no normals
-    else if (geo.index) geo.computeVertexNormals();
+    if (moves) spheres ??= worldSpheres(fr);
+    const press = moves ? (p, n, count) => (entry.dimpleMove = pressDimples(p, n, count, spheres.filter((s) => s.body !== net.body), moves)) : null;
+    if (fine) {
+      fine.update(pos, press);  // the net is then a wireframe: no normals
+    } else if (geo.index) {
+      geo.computeVertexNormals();
+      if (press && press(pos, geo.attributes.normal.array, net.node_count) > 0) geo.computeVertexNormals();
+    }
     geo.computeBoundingSphere();
   }
+}
+
+/// Every body's spheres at frame `fr` as { c: [x, y, z] (world, m), r (m), body }.
+export function worldSpheres(fr) {
+  const out = [], P = FLOATS.body_pose;
+  const v = new THREE.Vector3(), rot = new THREE.Quaternion();
+  for (let b = 0; b < fr.h.num_bodies; ++b) {
+    const p = fr.body_pose.subarray(P * b, P * b + P);
+    rot.set(p[3], p[4], p[5], p[6]);
+    for (const s of G.bodySpheres[b]) {
+      v.set(s[0], s[1], s[2]).applyQuaternion(rot);
+      out.push({ c: [v.x + p[0], v.y + p[1], v.z + p[2]], r: s[3], body: b });
+    }
+  }
+  return out;
 }
 
 /// The bodies the frame's graspers hold (its grasp array: the held body first of each item).

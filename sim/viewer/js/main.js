@@ -5,7 +5,7 @@ import { S, errors, setStatus, updateCounters, writeProbe } from './panel.js';
 import { FLOATS, setFrameLayout, LIFECYCLE, STARTUP, STEP, FLAGS, SAMPLE, FAULT_CAUSES, bits, extraDevices } from './protocol.js';
 import { params, renderer, scene3, camera, render, requestRender } from './stage.js';
 import { controls, fitCamera, followTool, preset, view } from './camera.js';
-import { COLORS, G, buildScene, addPlanes, frameBox, showBodies, showJointAxes, showCollisionSpheres, showCoarseNets, sizeCores } from './geometry.js';
+import { COLORS, G, buildScene, addPlanes, frameBox, showBodies, showJointAxes, showCollisionSpheres, showCoarseNets, sizeCores, worldSpheres } from './geometry.js';
 import { buildContacts, showContacts, forceScale } from './contacts.js';
 import { showLegend } from './legend.js';
 import { showPick, pick } from './pick.js';
@@ -250,6 +250,22 @@ window.numenView = {
     // The nets with a fine surface: its vertices and triangles sent and drawn, a few of its
     // vertices in the frame shown (m, world: indices 0, V/3, 2V/3, V − 1), the middle of its box
     // and whether the coarse net is shown.
+    // The organs given by their material: the largest dimple drawn, and how far any drawn vertex
+    // is inside another body's sphere (0: none).
+    if (last)
+      p.tissueNets = G.nets.filter((e) => e.moves).map(({ net, geo, fineObj, dimpleMove }) => {
+        const g = (fineObj ?? { geometry: geo }).geometry, pos = g.attributes.position.array;
+        const drawn = new Set(g.index.array);  // the vertices of its triangles (a net's interior nodes are not)
+        let inside = 0;
+        for (const { c, r, body } of worldSpheres(last)) {
+          if (body === net.body) continue;
+          for (const v of drawn) {
+            const k = 3 * v, d = Math.hypot(pos[k] - c[0], pos[k + 1] - c[1], pos[k + 2] - c[2]);
+            if (r - d > inside) inside = r - d;
+          }
+        }
+        return { name: net.name, dimpleMove: dimpleMove ?? 0, inside };
+      });
     p.netSurfaces = G.nets.filter((e) => e.fine).map(({ net, geo, fineObj }) => {
       const V = net.surface.point_count, pos = fineObj.geometry.attributes.position.array;
       const sample = [0, Math.floor(V / 3), Math.floor(2 * V / 3), V - 1];

@@ -21,6 +21,8 @@
 #include "numen/core/needle.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
 
 namespace {
 
@@ -75,6 +77,23 @@ TEST(ViewSceneMessage, DescribesTheNetsBodiesAndObstaclesOfTheDeformableScene) {
 
 // A mesh obstacle goes to the page as its surface: every vertex and triangle of the model's
 // mesh, in the obstacle's frame (sim/scenes/mesh.toml).
+// A net given by its material says so (`tissue`): the page draws the tools' dimples on it
+// (sim/viewer/js/tissue_dimple.js); a net given per spring does not carry the key.
+TEST(ViewSceneMessage, MarksAnOrganGivenByItsMaterial) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  const auto per_spring = parsed_scene_message(numen::sim::load_scene(shipped_scene("default.toml")));
+  ASSERT_GT(per_spring["nets"].size(), 0u);
+  for (const auto& n : per_spring["nets"]) EXPECT_FALSE(n.contains("tissue")) << n["name"];
+  numen::test::TempDir dir;
+  const std::string organ = "mesh = \"file\"\nfile = \"" + std::string(NUMEN_SOURCE_DIR) +
+                            "/sim/data/organ_lobe.obj\"\nyoungs_modulus_kpa = 120.0\npoisson_ratio = 0.45\n"
+                            "support_length = 0.02\nnodes = 250\n";
+  const auto material = parsed_scene_message(numen::sim::load_scene(
+      dir.write("tissue.toml", numen::test::indentation_bench_scene(organ, 0.0025, 1e-3))));
+  ASSERT_EQ(material["nets"].size(), 1u);
+  EXPECT_EQ(material["nets"][0]["tissue"], true);
+}
+
 TEST(ViewSceneMessage, CarriesAMeshObstaclesSurface) {
   const numen::sim::Scene scene = numen::sim::load_scene(shipped_scene("mesh.toml"));
   const auto j = parsed_scene_message(scene);

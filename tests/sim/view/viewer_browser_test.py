@@ -26,6 +26,9 @@ net (fine_surface_recording.py):
   - the organ is drawn as its fine surface (every triangle sent), in the net's green where its
     middle projects, with the coarse net hidden until its toggle shows it; the page's fine
     vertices are where the formula of docs/viewer.md puts them from the frame's node positions.
+On 5 s of the default scene with its organ given by its material (a 500-node net):
+  - the page draws the tool's dimple in the organ (more than 1 mm), and no drawn vertex of the
+    organ is inside a sphere of another body.
 On a run that latches a fault (the lattice scene on a bus losing 30 % of its frames):
   - the fault banner shows, with its cause, and the replay timeline has its mark.
 
@@ -552,6 +555,46 @@ def record_scene_text(numen, out, name, text, duration):
     return record(numen, out, name, scene, duration)
 
 
+def check_tissue_dimple(numen, browser, out):
+    """The default scene with its organ given by its material (E = 120 kPa, ν = 0.45, on a
+    500-node net; docs/tissue.md): 5 s of the excerpt, where the tool is 2.3 mm into the surface
+    the net carries. The page draws the dimple under it (tissue_dimple.js): a move of more than
+    1 mm, and no drawn vertex of the organ inside a sphere of another body."""
+    sys.path.insert(0, os.path.join(ROOT, "docs", "figures"))
+    import tissue_default_run  # noqa: E402  (material_scene(): default.toml given a material)
+    name = "tissue_dimple"
+    with open(os.path.join(ROOT, "sim", "scenes", "default.toml")) as f:
+        text = tissue_default_run.material_scene(
+            f.read(), {"youngs_modulus_kpa": 120.0, "poisson_ratio": 0.45, "density": 1000.0,
+                       "rayleigh_stiffness": 0.001, "support_length": 0.02}, 500)
+    try:
+        rec, r = record_scene_text(numen, out, name, text, 5.0)
+    except RuntimeError as e:
+        return [str(e)]
+    if r.returncode != 0:
+        return ["%s: exit %d\n%s" % (name, r.returncode, r.stderr)]
+    viewer = Viewer(numen, rec)
+    failures = []
+    try:
+        page = open_page(browser, viewer.url, "?frame=%d&w=%d&h=%d" % (viewer.frames - 1, VIEW_W, VIEW_H))
+        page.screenshot(os.path.join(out, "viewer_%s.png" % name))
+        nets = page.eval("numenView.probe()").get("tissueNets", [])
+        print("%s: %s" % (name, nets))
+        if len(nets) != 1 or nets[0]["name"] != "organ":
+            return failures + ["%s: the page has organs given by their material %s, not the organ" % (name, nets)]
+        if not nets[0]["dimpleMove"] > 1e-3:
+            failures.append("%s: the largest dimple drawn is %.3g m, not over 1 mm" % (name, nets[0]["dimpleMove"]))
+        if nets[0]["inside"] > 1e-6:
+            failures.append("%s: a drawn vertex of the organ is %.3g m inside a tool's sphere" % (name, nets[0]["inside"]))
+        failures += page_failures(page, name)
+        page.send("Page.close")
+    finally:
+        f = viewer.stop()
+        if f:
+            failures.append(f)
+    return failures
+
+
 def check_fault(numen, browser, out):
     """A run that latches (the default scene on a bus losing 30 % of its frames): the replay's
     last frame shows the fault banner with its cause, and the timeline marks it."""
@@ -790,6 +833,7 @@ def main():
         if not a.scene and not a.figures:
             failures += check_live(a.numen, browser)
             failures += check_fine_surface(a.numen, browser, a.out)
+            failures += check_tissue_dimple(a.numen, browser, a.out)
             failures += check_fault(a.numen, browser, a.out)
             failures += check_grasp(a.numen, browser, a.out)
             failures += check_devices(a.numen, browser, a.out)
