@@ -1,13 +1,15 @@
 // Tests of organs given by their material (docs/tissue.md; core/net_material.hpp): the
 // [[deformable]] keys youngs_modulus_kpa, poisson_ratio, density, rayleigh_stiffness and
 // support_length through a scene file, the force against indentation they give at several net
-// sizes, and the located errors of a bad material.
+// sizes, the located errors of a bad material, and the default recording's grasp of such an
+// organ.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,8 @@
 #include "numen/core/multirate.hpp"
 #include "numen/core/step.hpp"
 #include "numen/sim/input/input_error.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/run/run_summary.hpp"
 #include "numen/sim/scene/scene.hpp"
 #include "organ_indentation.hpp"
 #include "scene_text.hpp"
@@ -452,4 +456,58 @@ TEST(SceneTissue, ANetCoarserThanItsLoadPatchIsWarned) {
       dir.write("c.toml", bench_scene(organ_keys("nodes = 250\nload_patch_radius = 0.015\n"), 0.0025, 1e-3)));
   EXPECT_EQ(warned(given), "");
   EXPECT_DOUBLE_EQ(given.model.nets[0].load_patch_radius, 0.015);
+}
+
+// Grasping of tissue is kept (issue 67, "Keep what the organ has"): the default scene's recording
+// with a grasper on its jaws and its organ given by its material (E = 120 kPa, ν = 0.45, a
+// 500-node net) grasps the organ where the per-spring organ is grasped (docs/grasping.md, "On
+// the shipped recording": at 6.968 s and 7.824 s, released at 7.026 s and 8.913 s), holds it
+// with a pull and lets it go, and the run stays clean.
+TEST(SceneTissue, TheDefaultRecordingGraspsAnOrganGivenByItsMaterial) {
+  NUMEN_REQUIRE_ARTICULATION();
+  NUMEN_REQUIRE_DEFORMABLE();
+  TempDir dir;
+  std::string text = numen::test::shipped_scene_text_anywhere("default.toml");
+  // The organ's per-spring keys replaced by its material (docs/figures/tissue_default_run.py's
+  // material_scene()).
+  const std::size_t start = text.find("[[deformable]]\nname = \"organ\"");
+  ASSERT_NE(start, std::string::npos);
+  const std::size_t end = text.find("\n[", start + 1);
+  std::string table, line;
+  std::istringstream in(text.substr(start, end - start));
+  const std::vector<std::string> spring_keys = {"mass", "stiffness", "damping", "bending_stiffness",
+                                                "bending_damping", "tie_stiffness", "tie_damping"};
+  while (std::getline(in, line)) {
+    const std::string key = line.substr(0, line.find_first_of(" ="));
+    if (std::find(spring_keys.begin(), spring_keys.end(), key) == spring_keys.end()) table += line + "\n";
+  }
+  table += "youngs_modulus_kpa = 120.0\npoisson_ratio = 0.45\ndensity = 1000.0\n"
+           "rayleigh_stiffness = 0.001\nsupport_length = 0.02\nnodes = 500\n";
+  text = text.substr(0, start) + table + text.substr(end + 1);
+  text += "\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\n";
+  const Scene scene = load_scene(dir.write("grasp.toml", text));
+  ASSERT_EQ(scene.net_loads.size(), 1u);
+  ASSERT_TRUE(scene.net_loads[0].material);
+  numen::sim::RunOptions opt;
+  opt.duration_s = 9.5;
+  const numen::sim::RunSummary s = numen::sim::run_scene(scene, opt);
+  for (const std::string& e : s.grasp_events) std::printf("[   info   ] %s\n", e.c_str());
+  EXPECT_FALSE(s.nan_detected);
+  EXPECT_EQ(s.exit_status, 0);
+  EXPECT_EQ(s.grasps_started, 2);
+  EXPECT_EQ(s.grasps_released, 2);
+  EXPECT_EQ(s.grasps_slipped, 0);
+  ASSERT_EQ(s.grasp_events.size(), 4u);
+  const double times[] = {6.968, 7.026, 7.824, 8.913};  // the per-spring organ's
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_NE(s.grasp_events[i].find(i % 2 == 0 ? " grasp grasper: organ (" : " release grasper: organ ("),
+              std::string::npos) << s.grasp_events[i];
+    EXPECT_NEAR(std::stod(s.grasp_events[i]), times[i], 0.1) << s.grasp_events[i];
+  }
+  // Each release says the pull it held: more than nothing.
+  for (const std::size_t i : {std::size_t{1}, std::size_t{3}}) {
+    const std::size_t at = s.grasp_events[i].find("pull ");
+    ASSERT_NE(at, std::string::npos) << s.grasp_events[i];
+    EXPECT_GT(std::stod(s.grasp_events[i].substr(at + 5)), 0.1) << s.grasp_events[i];
+  }
 }
