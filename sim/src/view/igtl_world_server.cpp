@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "net/tcp_listen.hpp"
+#include "view/tissue_dimple.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/hal/device/safety_supervisor.hpp"
 #include "numen/hal/device/sample_check.hpp"
@@ -103,6 +104,11 @@ struct IgtlWorldServer::Organ {
   int net = -1;
   bool fine = false;
   std::vector<core::Vec3> points;  // mm, this frame's
+  // An organ given by its material: the tools' dimples drawn on it (view/tissue_dimple.hpp), with
+  // its triangles, its vertices' normals and the dimples' scratch; empty otherwise.
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<core::Vec3> normals;
+  std::vector<double> moves;
 #if NUMEN_WITH_OPENIGTLINK
   std::unique_ptr<hal::IgtlPolyDataPacker> packer;
 #endif
@@ -181,6 +187,11 @@ IgtlWorldServer::IgtlWorldServer(const core::Model& model, IgtlWorldSettings set
     if (count == 0) continue;  // a net without nodes has nothing to draw
     o.points.resize(count);
     o.packer = std::make_unique<hal::IgtlPolyDataPacker>(net.name, count, triangles);
+    if (net.contact_modulus > 0.0) {
+      o.triangles = triangles;
+      o.normals.resize(count);
+      o.moves.resize(count);
+    }
     organs_.push_back(std::move(o));
   }
   std::size_t thread_node = 0;
@@ -199,6 +210,7 @@ IgtlWorldServer::IgtlWorldServer(const core::Model& model, IgtlWorldSettings set
   }
 #endif
   nodes_.resize(static_cast<std::size_t>(model_.num_nodes()));
+  dimple_spheres_.reserve(model_.body_spheres.size());
   const TcpListener l = tcp_listen(settings_.host, settings_.port, true, 8, "--igtl");
   listen_fd_ = l.fd;
   port_ = l.port;
@@ -382,6 +394,23 @@ void IgtlWorldServer::add_organs(std::string& out, const platform::StateFrameVie
                           : node);
       else
         o.points[i] = 1e3 * node;
+    }
+    if (!o.moves.empty()) {  // the tools' dimples: every other body's spheres, in mm
+      dimple_spheres_.clear();
+      float p[7];
+      for (std::uint32_t b = 0; b < h.num_bodies && b < model_.bodies.size(); ++b) {
+        if (static_cast<int>(b) == net.body) continue;
+        view.body_pose(b, p);
+        const core::Quat q(p[6], p[3], p[4], p[5]);
+        const core::Vec3 at(p[0], p[1], p[2]);
+        const core::BodyModel& bm = model_.bodies[b];
+        for (int k = bm.sphere_begin; k < bm.sphere_begin + bm.sphere_count; ++k) {
+          const core::Sphere& sp = model_.body_spheres[static_cast<std::size_t>(k)];
+          dimple_spheres_.push_back({1e3 * (at + q * sp.center), 1e3 * sp.radius});
+        }
+      }
+      vertex_normals(o.points, o.triangles, o.normals);
+      press_tissue_dimples(o.points, o.normals, dimple_spheres_, o.moves);
     }
     o.packer->pack(h.time_ns, o.points, out);
   }

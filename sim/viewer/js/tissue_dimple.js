@@ -9,7 +9,8 @@
 // the rim, falling as 1/ρ), cut off at kReachRadii contact radii (less its value there, so that it
 // is continuous); then any drawn vertex still inside a sphere is put on the sphere's surface
 // along the surface's inward normal. A view of the simulation only: nothing of it goes back.
-// Pure functions on typed arrays (no three.js), so that node can test them.
+// The OpenIGTLink surfaces draw the same (sim/src/view/tissue_dimple.hpp, its C++ twin: keep the
+// two alike). Pure functions on typed arrays (no three.js), so that node can test them.
 
 /// How far a dimple reaches, in contact radii (beyond it the surface is left as the net puts it).
 export const kReachRadii = 6;

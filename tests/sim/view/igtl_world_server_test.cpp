@@ -10,8 +10,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <map>
 #include <string>
@@ -293,6 +295,54 @@ TEST(IgtlWorldServer, TheOrgansPolyDataIsTheirSurfaceAtTheFramesTimeAndLateClien
       }
     }
   }
+}
+
+// An organ given by its material (its contact_modulus) is sent with the tools' dimples drawn
+// (view/tissue_dimple.hpp; docs/openigtlink.md, "The organs"): the probe's 4 mm sphere placed
+// 1 mm into the organ's surface at one of its nodes, the organ's POLYDATA has that node 1 mm in
+// and no point inside the sphere; the ball (per spring) is sent as its nodes are.
+TEST(IgtlWorldServer, AnOrganGivenByItsMaterialIsSentWithTheToolsDimple) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::sim::Scene scene =
+      numen::sim::load_scene(std::string(NUMEN_TEST_DATA_DIR) + "/node_contacts.toml");
+  numen::core::Model& model = scene.model;
+  ASSERT_EQ(model.nets.size(), 2u);
+  model.nets[0].contact_modulus = 1.5e5;  // only the flag is read here
+  const numen::core::NetModel& organ = model.nets[0];
+  const numen::core::NetModel& ball = model.nets[1];
+  const int probe = static_cast<int>(model.bodies.size()) - 1;
+  ASSERT_EQ(model.bodies[static_cast<std::size_t>(probe)].name, "probe");
+  const double r = model.body_spheres[static_cast<std::size_t>(model.bodies[static_cast<std::size_t>(probe)].sphere_begin)].radius;
+  numen::core::Data data = numen::core::make_data(model);
+  // The organ's node 0 at rest and its outward normal (from the organ's core: an icosphere).
+  const numen::core::Vec3 core = data.bodies[static_cast<std::size_t>(organ.body)].position;
+  const numen::core::Vec3 node = data.nodes[static_cast<std::size_t>(organ.node_begin)].position;
+  const numen::core::Vec3 n = (node - core).normalized();
+  const numen::core::Vec3 centre = node + (r - 0.001) * n;
+  data.bodies[static_cast<std::size_t>(probe)].position = centre;
+  data.bodies[static_cast<std::size_t>(probe)].orientation = numen::core::Quat::Identity();
+  numen::sim::IgtlWorldSettings ws;
+  ws.port = 0;
+  numen::sim::IgtlWorldServer server(model, ws);
+  numen::test::IgtlTestReader reader(server.port());
+  ASSERT_TRUE(reader.connected());
+  ASSERT_TRUE(server.write_frame(igtl_world_test_frame(numen::sim::view_frame_layout(scene), data, {}, {})));
+  const auto flush = [&] { server.flush(); };
+  ASSERT_TRUE(reader.read_until([&] { return igtl_world_test_of(reader, "POLYDATA", "ball").size() == 1; }, flush));
+  const auto got = igtl_world_test_of(reader, "POLYDATA", "organ");
+  ASSERT_EQ(got.size(), 1u);
+  ASSERT_EQ(got[0].points.size(), static_cast<std::size_t>(organ.node_count));
+  double inside = 0.0;
+  for (const numen::core::Vec3& p : got[0].points) inside = std::max(inside, 1e3 * r - (p - 1e3 * centre).norm());
+  const double moved = (got[0].points[0] - 1e3 * node).norm();
+  std::printf("the organ's node under the probe moved %.4f mm in; deepest point inside the sphere %.2g mm\n",
+              moved, inside);
+  EXPECT_NEAR(moved, 1.0, 0.05) << "mm: the dimple under the sphere";
+  EXPECT_LT(inside, 1e-3) << "mm";
+  const auto balls = igtl_world_test_of(reader, "POLYDATA", "ball");
+  for (int i = 0; i < ball.node_count; ++i)
+    EXPECT_LT((balls[0].points[static_cast<std::size_t>(i)] -
+               1e3 * data.nodes[static_cast<std::size_t>(ball.node_begin + i)].position).norm(), 1e-3);
 }
 
 // Issue 69: the suturing scene's thread is a POLYDATA named after it every frame: its segments + 1

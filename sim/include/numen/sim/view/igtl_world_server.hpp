@@ -129,6 +129,8 @@ struct IgtlWorldCounters {
                                        ///< client 64 KiB above its limit).
 };
 
+struct DimpleSphere;  // a sphere pressing an organ's drawn surface (src/view/tissue_dimple.hpp)
+
 /// The world as OpenIGTLink messages (see the file comment).
 class IgtlWorldServer final : public platform::StateFrameSink {
  public:
@@ -198,6 +200,7 @@ class IgtlWorldServer final : public platform::StateFrameSink {
   std::vector<Organ> organs_;
   std::vector<Thread> threads_;
   std::vector<core::NodeState> nodes_;  // the frame's node positions (m), for the fine surfaces
+  std::vector<DimpleSphere> dimple_spheres_;  // the bodies' spheres (mm), for an organ's dimples
   std::int64_t organ_due_ns_ = 0;       // next frame time an organ update is due
   bool organ_sent_ = false;
   Last last_;
