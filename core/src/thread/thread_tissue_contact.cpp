@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <span>
+#include <vector>
 
 #include "mesh/mesh_shape_query.hpp"
 #include "net/net_terms.hpp"
@@ -19,6 +21,7 @@
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_surface_map.hpp"
 #include "numen/core/thread.hpp"
 
 namespace numen::core {
@@ -41,8 +44,11 @@ bool near_a_passage(const ThreadModel& thread, const ThreadState& st, int i) noe
 /// Node i's contact with the triangle (a, b, c) of unit outward normal n, if deeper than its
 /// hit so far: on the triangle's face, the node's sphere below the plane by less than
 /// kThreadTissueContactReach; at an edge or a corner, the sphere reaching it from outside.
-void touch_triangle(const Vec3& x, double radius, int face, int material, const Vec3& a,
-                    const Vec3& b, const Vec3& c, const Vec3& n, ThreadTissueHit& hit) noexcept {
+/// `locate(q, w, face, weights)`: the net triangle and weights that carry the touched point q
+/// (barycentric w on (a, b, c)), called for a deeper hit only.
+template <typename Locate>
+void touch_triangle(const Vec3& x, double radius, int material, const Vec3& a, const Vec3& b,
+                    const Vec3& c, const Vec3& n, ThreadTissueHit& hit, Locate locate) noexcept {
   int feature = detail::kFace;
   Vec3 w;
   const Vec3 q = detail::closest_on_triangle(x, a, b, c, feature, w);
@@ -61,10 +67,40 @@ void touch_triangle(const Vec3& x, double radius, int face, int material, const 
   }
   if (!(depth > hit.depth)) return;
   hit.depth = depth;
-  hit.face = face;
+  locate(q, w, hit.face, hit.weights);
   hit.material = material;
-  hit.weights = w;
   hit.normal = normal;
+}
+
+/// The net triangle's nodes' outcodes against the box [lo, hi] (bits 2k, 2k + 1: below, above on
+/// axis k) into `outcode`; false when all of the net's nodes share a bit (the net is out of it).
+bool net_outcodes(const NetModel& net, const Data& data, const Vec3& lo, const Vec3& hi,
+                  std::vector<std::uint8_t>& outcode) noexcept {
+  std::uint8_t all = 0x3f;
+  for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
+    const Vec3& x = data.nodes[static_cast<std::size_t>(i)].position;
+    std::uint8_t code = 0;
+    for (int k = 0; k < 3; ++k)
+      code |= static_cast<std::uint8_t>((x[k] < lo[k] ? 1u : 0u) << (2 * k) | (x[k] > hi[k] ? 2u : 0u) << (2 * k));
+    outcode[static_cast<std::size_t>(i)] = code;
+    all &= code;
+  }
+  return all == 0;
+}
+
+/// Each node of the sorted thread (scratch.tissue_order / tissue_key along `axis`) within `reach`
+/// of the bounds [flo, fhi] of a triangle: visit(i, x).
+template <typename Visit>
+void nodes_near(const ThreadState& st, const ThreadScratch& scratch, int axis, const Vec3& flo,
+                const Vec3& fhi, double reach, Visit visit) noexcept {
+  const auto key_begin = scratch.tissue_key.begin(), key_end = scratch.tissue_key.end();
+  const auto first = std::lower_bound(key_begin, key_end, flo[axis] - reach);
+  for (auto it = first; it != key_end && *it <= fhi[axis] + reach; ++it) {
+    const int i = scratch.tissue_order[static_cast<std::size_t>(it - key_begin)];
+    const Vec3& x = st.position[static_cast<std::size_t>(i)];
+    if ((x.array() < flo.array() - reach).any() || (x.array() > fhi.array() + reach).any()) continue;
+    visit(i, x);
+  }
 }
 
 /// The thread's box (its nodes grown by its radius) and its nodes in order along the box's
@@ -99,31 +135,25 @@ int sort_nodes_along_the_thread(const ThreadModel& thread, const ThreadState& st
 }
 
 /// Each node's deepest hit on the nets' surface triangles (touch_triangle()) into
-/// scratch.tissue_hits. The net's triangles are culled by their nodes' outcodes against the
-/// thread's box [lo, hi] grown by the reach: a net all of whose nodes share a bit is out of
-/// reach, a triangle whose nodes share one too.
+/// scratch.tissue_hits: a net's own triangles, or where it carries a fine surface (the organ's
+/// drawn surface, docs/fine-surface.md) the fine triangles riding on them, each hit then carried
+/// by the net triangle under its point (the one its nearest corner rides on, the point's foot
+/// on it). The net's triangles are culled by their nodes' outcodes against the thread's box
+/// [lo, hi] grown by the reach and the fine surface's offsets: a net all of whose nodes share a
+/// bit is out of reach, a triangle whose nodes share one too; a net triangle's riders are placed
+/// only when a node of the thread is within the reach and the fine surface's of its bounds.
 void find_tissue_hits(const Model& model, const Data& data, const ThreadModel& thread,
                       const ThreadState& st, ThreadScratch& scratch, int axis, const Vec3& lo,
                       const Vec3& hi) noexcept {
   const double rt = thread.radius;
-  const std::vector<std::int32_t>& order = scratch.tissue_order;
-  const auto key_begin = scratch.tissue_key.begin(), key_end = scratch.tissue_key.end();
   const double reach = rt + kThreadTissueContactReach;
-  const Vec3 box_lo = lo.array() - kThreadTissueContactReach, box_hi = hi.array() + kThreadTissueContactReach;
   std::vector<std::uint8_t>& outcode = scratch.net_node_outcode;
+  const std::span<const NodeState> nodes(data.nodes.data(), data.nodes.size());
   for (const NetModel& net : model.nets) {
     if (net.face_count == 0) continue;
-    std::uint8_t all = 0x3f;
-    for (int i = net.node_begin; i < net.node_begin + net.node_count; ++i) {
-      const Vec3& x = data.nodes[static_cast<std::size_t>(i)].position;
-      std::uint8_t code = 0;
-      for (int k = 0; k < 3; ++k)
-        code |= static_cast<std::uint8_t>((x[k] < box_lo[k] ? 1u : 0u) << (2 * k) |
-                                          (x[k] > box_hi[k] ? 2u : 0u) << (2 * k));
-      outcode[static_cast<std::size_t>(i)] = code;
-      all &= code;
-    }
-    if (all != 0) continue;
+    const bool fine = net.surface_face_count > 0;
+    const double grow = kThreadTissueContactReach + (fine ? net.surface_reach : 0.0);
+    if (!net_outcodes(net, data, lo.array() - grow, hi.array() + grow, outcode)) continue;
     for (int f = net.face_begin; f < net.face_begin + net.face_count; ++f) {
       const std::array<int, 3>& t = model.net_faces[static_cast<std::size_t>(f)];
       if ((outcode[static_cast<std::size_t>(t[0])] & outcode[static_cast<std::size_t>(t[1])] &
@@ -132,17 +162,49 @@ void find_tissue_hits(const Model& model, const Data& data, const ThreadModel& t
       const Vec3& a = data.nodes[static_cast<std::size_t>(t[0])].position;
       const Vec3& b = data.nodes[static_cast<std::size_t>(t[1])].position;
       const Vec3& c = data.nodes[static_cast<std::size_t>(t[2])].position;
-      const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
-      const Vec3 cross = (b - a).cross(c - a);
-      const double area2 = cross.norm();
-      if (!(area2 > 0.0)) continue;
-      const Vec3 n = cross / area2;
-      const auto first = std::lower_bound(key_begin, key_end, flo[axis] - reach);
-      for (auto it = first; it != key_end && *it <= fhi[axis] + reach; ++it) {
-        const int i = order[static_cast<std::size_t>(it - key_begin)];
-        const Vec3& x = st.position[static_cast<std::size_t>(i)];
-        if ((x.array() < flo.array() - reach).any() || (x.array() > fhi.array() + reach).any()) continue;
-        touch_triangle(x, rt, f, net.material, a, b, c, n, scratch.tissue_hits[static_cast<std::size_t>(i)]);
+      if (!fine) {
+        const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
+        const Vec3 cross = (b - a).cross(c - a);
+        const double area2 = cross.norm();
+        if (!(area2 > 0.0)) continue;
+        const Vec3 n = cross / area2;
+        nodes_near(st, scratch, axis, flo, fhi, reach, [&](int i, const Vec3& x) {
+          touch_triangle(x, rt, net.material, a, b, c, n, scratch.tissue_hits[static_cast<std::size_t>(i)],
+                         [&](const Vec3&, const Vec3& w, int& face, Vec3& weights) { face = f, weights = w; });
+        });
+        continue;
+      }
+      // The fine triangles riding on f (one riding on several is touched from each: a hit keeps
+      // the deepest), if a node of the thread is within their reach of f's bounds.
+      bool near = false;
+      nodes_near(st, scratch, axis, a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c),
+                 reach + net.surface_reach, [&](int, const Vec3&) { near = true; });
+      if (!near) continue;
+      const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
+      const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
+      for (std::size_t k = first; k < last; ++k) {
+        const std::array<int, 3>& ft = model.net_surface_faces[static_cast<std::size_t>(model.net_face_surface_faces[k])];
+        const Vec3 p[3] = {net_surface_position(model, nodes, ft[0]), net_surface_position(model, nodes, ft[1]),
+                           net_surface_position(model, nodes, ft[2])};
+        const Vec3 flo = p[0].cwiseMin(p[1]).cwiseMin(p[2]), fhi = p[0].cwiseMax(p[1]).cwiseMax(p[2]);
+        const Vec3 cross = (p[1] - p[0]).cross(p[2] - p[0]);
+        const double area2 = cross.norm();
+        if (!(area2 > 0.0) || !flo.allFinite() || !fhi.allFinite()) continue;
+        const Vec3 n = cross / area2;
+        nodes_near(st, scratch, axis, flo, fhi, reach, [&](int i, const Vec3& x) {
+          touch_triangle(x, rt, net.material, p[0], p[1], p[2], n, scratch.tissue_hits[static_cast<std::size_t>(i)],
+                         [&](const Vec3& q, const Vec3& w, int& face, Vec3& weights) {
+                           int m = 0;  // the corner nearest q carries it: its net triangle, q's foot there
+                           if (w[1] > w[m]) m = 1;
+                           if (w[2] > w[m]) m = 2;
+                           face = model.net_surface_points[static_cast<std::size_t>(ft[static_cast<std::size_t>(m)])].face;
+                           const std::array<int, 3>& nt = model.net_faces[static_cast<std::size_t>(face)];
+                           int feature = detail::kFace;
+                           detail::closest_on_triangle(q, nodes[static_cast<std::size_t>(nt[0])].position,
+                                                       nodes[static_cast<std::size_t>(nt[1])].position,
+                                                       nodes[static_cast<std::size_t>(nt[2])].position, feature, weights);
+                         });
+        });
       }
     }
   }
