@@ -7,11 +7,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "alloc_counter.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/mesh.hpp"
+#include "numen/core/mesh_shape.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
@@ -425,6 +429,65 @@ TEST(Thread, ANonFiniteStepIsRolledBackAndCounted) {
   core::step(m, d);
   EXPECT_EQ(d.status & core::kNonFinite, 0u);
   EXPECT_EQ(d.nonfinite_steps, 1);
+}
+
+// A thread dropped on a mesh obstacle and on a sphere set lies on them, not through them
+// (thread.hpp "Couplings": its nodes against every obstacle shape): the 3-0 thread, 20 segments,
+// free, 2 mm over a 20 mm box given as a mesh, and over a bed of 2 mm spheres 2 mm apart whose
+// tops are at z = 0; gravity; 1 s.
+TEST(Thread, LiesOnAMeshAndOnASphereSetNotThroughThem) {
+  const auto dropped = [](bool mesh) {
+    core::ThreadModel t;
+    t.segments = 20;
+    t.length = 0.02;
+    t.start = Vec3(-0.01, 0.0, 0.002);
+    t.direction = Vec3::UnitX();
+    core::Model m = test::thread_model(t, [&](core::Model& mm) {
+      mm.gravity = Vec3(0.0, 0.0, -9.81);
+      mm.threads[0].tie_start.body = -2;  // free
+      core::Obstacle o;
+      o.name = mesh ? "block" : "bed";
+      if (mesh) {
+        core::MeshShape shape;
+        EXPECT_EQ(core::build_mesh_shape(core::make_box(Vec3(0.01, 0.01, 0.01), 2), shape), "");
+        mm.meshes.push_back(std::move(shape));
+        o.type = core::ShapeType::kMesh;
+        o.mesh = 0;
+        o.pose.position = Vec3(0.0, 0.0, -0.01);
+      } else {
+        o.type = core::ShapeType::kSphereSet;
+        o.sphere_begin = 0;
+        for (int i = -7; i <= 7; ++i)
+          for (int j = -2; j <= 2; ++j) mm.static_spheres.push_back({Vec3(0.002 * i, 0.002 * j, -0.002), 0.002});
+        o.sphere_count = static_cast<int>(mm.static_spheres.size());
+      }
+      mm.obstacles.push_back(o);
+    });
+    core::Data d = core::make_data(m);
+    int contacts = 0;
+    for (int i = 0; i < 1000; ++i) {
+      core::step(m, d);
+      EXPECT_EQ(d.status & core::kNonFinite, 0u) << "step " << i;
+      contacts = d.threads[0].output.obstacle_contacts;
+    }
+    // How deep any node's sphere is in the obstacle.
+    double deepest = 0.0;
+    const double r = m.threads[0].radius;
+    for (const Vec3& x : d.threads[0].position) {
+      if (mesh) deepest = std::max(deepest, r - x.z());  // the box's top at z = 0
+      else
+        for (const core::Sphere& sp : m.static_spheres) deepest = std::max(deepest, r + sp.radius - (x - sp.center).norm());
+    }
+    double lowest = 1e9;
+    for (const Vec3& x : d.threads[0].position) lowest = std::min(lowest, x.z());
+    std::printf("on the %s: %d contacts, lowest node %.4f mm, deepest %.4f mm\n", mesh ? "mesh" : "sphere set",
+                contacts, 1e3 * lowest, 1e3 * deepest);
+    EXPECT_GE(contacts, 15) << (mesh ? "mesh" : "sphere set");
+    EXPECT_LT(deepest, 0.2 * r) << (mesh ? "mesh" : "sphere set");
+    EXPECT_GT(lowest, -0.001) << "not fallen through";
+  };
+  dropped(true);
+  dropped(false);
 }
 
 // Stepping a thread with a tie to a body, contacts with a sphere and an obstacle, an eyelet

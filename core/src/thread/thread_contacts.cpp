@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "contact/collision_query.hpp"
 #include "contact/narrowphase.hpp"
 #include "mesh/mesh_shape_query.hpp"
+#include "scratch/data_scratch.hpp"
 #include "scratch/thread_scratch.hpp"
 #include "thread/thread_terms.hpp"
 #include "numen/core/contact_force.hpp"
@@ -133,11 +135,30 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
   }
 }
 
-void gather_thread_obstacle_contacts(const Model& model, const ThreadModel& thread,
+void gather_thread_obstacle_contacts(const Model& model, Data& data, const ThreadModel& thread,
                                      ThreadState& st, ThreadScratch& scratch) noexcept {
   const double rt = thread.radius;
+  // The sphere sets' spheres through the static grid (as the bodies' spheres meet them,
+  // collision.cpp), each node its own query.
+  if (model.static_grid.num_entries > 0) {
+    CollisionScratch& cs = data.scratch->collision;
+    for (std::size_t i = 0; i < st.position.size(); ++i) {
+      const Vec3& x = st.position[i];
+      collision_detail::query_static_grid(
+          model.static_grid, x, rt, cs.entry_stamp.data(), cs.stamp, [&](const GridEntry& en) {
+            ContactGeometry g;
+            if (!sphere_sphere(x, rt, en.center, en.radius, Vec3::UnitZ(), g)) return;
+            ThreadPointTerm* term = next_thread_term(scratch, st);
+            if (term == nullptr) return;
+            const MaterialPair& mp = model.material_pair(thread.material, en.material);
+            term->a = term->b = static_cast<int>(i) + 1;
+            fill_contact(*term, mp, mp.stiffness, g.depth, g.normal, st.velocity[i]);
+            ++st.output.obstacle_contacts;
+          });
+    }
+  }
   for (const Obstacle& o : model.obstacles) {
-    if (o.type == ShapeType::kSphereSet || o.type == ShapeType::kMesh) continue;
+    if (o.type == ShapeType::kSphereSet) continue;  // above
     const MaterialPair& mp = model.material_pair(thread.material, o.material);
     const Mat3 rot = o.pose.orientation.toRotationMatrix();
     for (std::size_t i = 0; i < st.position.size(); ++i) {
@@ -155,6 +176,9 @@ void gather_thread_obstacle_contacts(const Model& model, const ThreadModel& thre
           break;
         case ShapeType::kCapsule:
           hit = sphere_capsule(x, rt, o.pose.position, rot.col(2), o.half_length, o.radius, g);
+          break;
+        case ShapeType::kMesh:
+          hit = o.mesh >= 0 && sphere_mesh(x, rt, model.meshes[static_cast<std::size_t>(o.mesh)], o.pose, g);
           break;
         default: break;
       }

@@ -259,7 +259,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
   for (ThreadEyeletTerm& et : sc.eyelet_terms) et.set = false;
   gather_thread_grasps(model, data, index, st, sc);
   gather_thread_body_contacts(model, data, index, th, st, sc);
-  gather_thread_obstacle_contacts(model, th, st, sc);
+  gather_thread_obstacle_contacts(model, data, th, st, sc);
   gather_thread_tissue_contacts(model, data, th, st, sc);
   gather_thread_eyelets(th, st, sc);
   std::vector<Vec3>& x = sc.trial_position;

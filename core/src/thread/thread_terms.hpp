@@ -56,9 +56,10 @@ const GraspState* jaw_holding_thread(const Model& model, const Data& data, int i
 /// Whether `segment` is next to a node `hold` holds (its contacts with the jaws are off).
 bool next_to_held_node(const GraspState& hold, int segment) noexcept;
 
-/// Node contacts (a sphere of the thread's radius) with the plane, box, sphere and capsule
-/// obstacles (not sphere sets or meshes).
-void gather_thread_obstacle_contacts(const Model& model, const ThreadModel& thread,
+/// Node contacts (a sphere of the thread's radius) with the obstacles: planes, boxes, spheres,
+/// capsules, meshes (sphere_mesh()) and the sphere sets' spheres (through Model::static_grid,
+/// its query stamps in the collision scratch).
+void gather_thread_obstacle_contacts(const Model& model, Data& data, const ThreadModel& thread,
                                      ThreadState& state, ThreadScratch& scratch) noexcept;
 
 /// Self contact, candidates: the pairs of non-adjacent segments whose boxes, swept from the

@@ -20,10 +20,10 @@
 /// rigid body (ThreadTie; the body's translational effective mass at the point is in the
 /// thread's solve, the tie force goes back to the body in the same step), penalty contacts of
 /// the segments with the bodies' spheres (reaction on the body), of the nodes with the static
-/// obstacles (plane, box, sphere, capsule), of non-adjacent segments with each other
-/// (capsule–capsule with the thread radius), of the nodes with the nets' surface triangles
-/// (tissue; the reaction goes to the triangle's nodes as held node springs, as an eyelet's on
-/// tissue below), and eyelets: points the thread slides through
+/// obstacles (plane, box, sphere, capsule, mesh, the sphere sets' spheres), of non-adjacent
+/// segments with each other (capsule–capsule with the thread radius), of the nodes with the
+/// nets' surface triangles, or the fine surface a net carries (tissue; the reaction goes to the
+/// net triangle's nodes as held node springs, as an eyelet's on tissue below), and eyelets: points the thread slides through
 /// with friction along it (ThreadEyelet, written by the caller before each step, or taken over
 /// from a needle's punctures), and a grasper's jaws holding some of its nodes (GraspThreadNode,
 /// grasp.hpp: springs to the jaws' points, the reaction on the jaws; docs/suturing.md "The
