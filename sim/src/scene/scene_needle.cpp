@@ -125,6 +125,20 @@ void check_needles(const TomlTable& root, Scene& scene) {
                                  " mm): the jaws may close on the wire between two spheres without grasping it; "
                                  "give the jaws spheres closer together (r − √(r² − d²/4) < wire_radius)");
     }
+    // Through an organ given by its material on a net coarser than about 1 mm: the tip's load
+    // on a node dimples the soft net into a funnel, and a face contact that appears in its crease
+    // overshoots the puncture (docs/suturing.md, "An organ given by its material").
+    for (std::size_t net_k = 0; net_k < m.nets.size() && net_k < scene.net_loads.size(); ++net_k) {
+      const NetLoad& load = scene.net_loads[net_k];
+      const double edge = load.material_constants.surface_mean_edge;
+      if (!std::isfinite(n.puncture_force) || !load.material || !(edge > kNeedleMaterialNetEdge)) continue;
+      scene.warnings.push_back(
+          "needle \"" + n.name + "\": deformable \"" + m.nets[net_k].name + "\" is given by its material on a net of " +
+          format_input_number(edge * 1e3) + " mm mean edge: the needle's puncture there can overshoot its "
+          "puncture_force (3.35 N for 1 N on a slab of 2 mm cells, 1.02 N on 1 mm cells; docs/suturing.md, \"An "
+          "organ given by its material\"); give the organ a net of about 1 mm where the needle goes in (nodes or "
+          "edge_length)");
+    }
     // Placed inside tissue.
     if constexpr (core::kWithDeformable) {
       const core::BodyModel& b = m.bodies[static_cast<std::size_t>(n.body)];

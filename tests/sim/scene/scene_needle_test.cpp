@@ -1,6 +1,6 @@
 // Tests of sim/scene/scene_needle: the [[needle]] keys of a scene file, their defaults, and the
 // located errors — a value out of range, a needle larger than the jaws can hold, a needle placed
-// inside tissue, a puncture threshold ≤ 0 (docs/suturing.md "Scene keys").
+// inside tissue, a puncture threshold ≤ 0 (docs/suturing.md "Scene keys") — and the warnings.
 
 #include <gtest/gtest.h>
 
@@ -11,6 +11,7 @@
 #include "build_features.hpp"
 #include "numen/core/needle.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "scene/scene_needle.hpp"
 #include "scene_text.hpp"
 #include "temp_dir.hpp"
 
@@ -135,4 +136,30 @@ TEST(SceneNeedle, JawsThatDipDeeperThanTheWireBetweenTheirSpheresAreWarned) {
   const std::string dense_text = replace(replace(default_with(needle), "count = 4", "count = 10"), "count = 4", "count = 10");
   const numen::sim::Scene dense = numen::sim::load_scene(dir.write("dense.toml", dense_text));
   for (const std::string& w : dense.warnings) EXPECT_EQ(w.find("jaws dip"), std::string::npos) << w;
+}
+
+TEST(SceneNeedle, APunctureIntoAnOrganGivenByItsMaterialOnACoarseNetIsWarned) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  // The shipped organ given by its material on a 500-node net (its mean edge above 1.5 mm): a
+  // needle that punctures is warned that its puncture can overshoot there; one that never
+  // punctures (no puncture_force) is not.
+  numen::test::TempDir dir;
+  const std::string organ = "mesh = \"file\"\nfile = \"" + std::string(NUMEN_SOURCE_DIR) +
+                            "/sim/data/organ_lobe.obj\"\nyoungs_modulus_kpa = 120.0\npoisson_ratio = 0.45\n"
+                            "support_length = 0.02\nnodes = 500\n";
+  const std::string bench = numen::test::indentation_bench_scene(organ, 0.0025, 1e-3);
+  const std::string needle = "\n[[needle]]\nname = \"n\"\nposition = [0.0, 0.1, 0.1]\n";
+  const auto warnings = [](const numen::sim::Scene& s) {
+    int n = 0;
+    for (const std::string& w : s.warnings)
+      n += w.find("needle \"n\": deformable \"organ\" is given by its material on a net of ") != std::string::npos &&
+           w.find("mm mean edge: the needle's puncture there can overshoot its puncture_force") != std::string::npos;
+    return n;
+  };
+  const numen::sim::Scene punctures =
+      numen::sim::load_scene(dir.write("a.toml", bench + needle + "puncture_force = 1.0\n"));
+  ASSERT_TRUE(punctures.net_loads[0].material);
+  EXPECT_GT(punctures.net_loads[0].material_constants.surface_mean_edge, numen::sim::kNeedleMaterialNetEdge);
+  EXPECT_EQ(warnings(punctures), 1);
+  EXPECT_EQ(warnings(numen::sim::load_scene(dir.write("b.toml", bench + needle))), 0);
 }
