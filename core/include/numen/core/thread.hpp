@@ -23,11 +23,11 @@
 /// obstacles (plane, box, sphere, capsule, mesh, the sphere sets' spheres), of non-adjacent
 /// segments with each other (capsule–capsule with the thread radius), of the nodes with the
 /// nets' surface triangles, or the fine surface a net carries (tissue; the reaction goes to the
-/// net triangle's nodes as held node springs, as an eyelet's on tissue below), and eyelets: points the thread slides through
-/// with friction along it (ThreadEyelet, written by the caller before each step, or taken over
-/// from a needle's punctures), and a grasper's jaws holding some of its nodes (GraspThreadNode,
-/// grasp.hpp: springs to the jaws' points, the reaction on the jaws; docs/suturing.md "The
-/// thread in the jaws").
+/// net triangle's nodes as held node springs, as an eyelet's on tissue below), and eyelets:
+/// points the thread slides through with friction along it (ThreadEyelet, written by the
+/// caller before each step, or taken over from a needle's punctures), and a grasper's jaws
+/// holding some of its nodes (GraspThreadNode, grasp.hpp: springs to the jaws' points, the
+/// reaction on the jaws; docs/suturing.md "The thread in the jaws").
 ///
 /// Through tissue (docs/suturing.md "The thread through tissue"): a thread whose start is tied
 /// to a needle (ThreadModel::needle) takes over each puncture point the needle lets go past its
