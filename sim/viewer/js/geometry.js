@@ -155,11 +155,12 @@ export function showCoarseNets(on) {
 }
 
 /// What buildScene() made: one entry per body (its group and its ghost), net and joint; a net's
-/// entry { net, obj, geo, fine, fineObj, moves, dimpleMove }: its node geometry and what draws it (obj: its
-/// triangles, or points without any; a wireframe under a fine surface), its fine surface
-/// (fine_surface.js, null without one) and that surface's mesh, and for an organ given by its
-/// material (the entry's `tissue`) the dimples' scratch (tissue_dimple.js; null otherwise) and
-/// the largest move they made in the frame drawn (m); bodySpheres, each body's spheres ([x, y, z, r] in its frame).
+/// entry { net, obj, geo, fine, fineObj, moves, dimpleMove }: its node geometry and what draws
+/// it (obj: its triangles, or points without any; a wireframe under a fine surface), its fine
+/// surface (fine_surface.js, null without one) and that surface's mesh, and for an organ given
+/// by its material (the entry's `tissue`) the dimples' scratch (tissue_dimple.js; null
+/// otherwise) and the largest move they made in the frame drawn (m); bodySpheres, each body's
+/// spheres ([x, y, z, r] in its frame).
 export const G = { bodies: [], ghosts: [], nets: [], jointAxes: [], obstacleBox: new THREE.Box3(), bodySpheres: [] };
 
 /// Builds the static world of the scene message `msg`.
@@ -316,7 +317,8 @@ export function showBodies(fr) {
     pos.set(fr.node_position.subarray(N * net.node_begin, N * (net.node_begin + net.node_count)));
     geo.attributes.position.needsUpdate = true;
     if (moves) spheres ??= worldSpheres(fr);
-    const press = moves ? (p, n, count) => (entry.dimpleMove = pressDimples(p, n, count, spheres.filter((s) => s.body !== net.body), moves)) : null;
+    const others = moves ? spheres.filter((s) => s.body !== net.body) : null;
+    const press = moves ? (p, n, count) => (entry.dimpleMove = pressDimples(p, n, count, others, moves)) : null;
     if (fine) {
       fine.update(pos, press);  // the net is then a wireframe: no normals
     } else if (geo.index) {

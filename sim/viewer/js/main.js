@@ -247,9 +247,6 @@ window.numenView = {
                           position: Array.from(last.body_pose.subarray(P * i, P * i + 3)),
                           middle: middle?.toArray() ?? null, middlePx: middle ? projectPoint(middle) : null });
     });
-    // The nets with a fine surface: its vertices and triangles sent and drawn, a few of its
-    // vertices in the frame shown (m, world: indices 0, V/3, 2V/3, V − 1), the middle of its box
-    // and whether the coarse net is shown.
     // The organs given by their material: the largest dimple drawn, and how far any drawn vertex
     // is inside another body's sphere (0: none).
     if (last)
@@ -266,6 +263,9 @@ window.numenView = {
         }
         return { name: net.name, dimpleMove: dimpleMove ?? 0, inside };
       });
+    // The nets with a fine surface: its vertices and triangles sent and drawn, a few of its
+    // vertices in the frame shown (m, world: indices 0, V/3, 2V/3, V − 1), the middle of its box
+    // and whether the coarse net is shown.
     p.netSurfaces = G.nets.filter((e) => e.fine).map(({ net, geo, fineObj }) => {
       const V = net.surface.point_count, pos = fineObj.geometry.attributes.position.array;
       const sample = [0, Math.floor(V / 3), Math.floor(2 * V / 3), V - 1];
