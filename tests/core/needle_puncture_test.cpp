@@ -161,10 +161,11 @@ TEST(NeedlePuncture, ANeedlePuncturesAnOrganGivenByItsMaterial) {
   ASSERT_EQ(p.punctures, 1);
   EXPECT_EQ(p.exits, 1);
   EXPECT_LT(p.max_deviation, 1e-3) << "m: the tissue held the needle on its arc";
-  // Not within 10 % of the threshold here (docs/suturing.md, "A needle into an organ given by its
-  // material"): the soft slab dimples under the tip, which slides down the dimple's side (the
-  // force along the needle falls from 0.75 N), until a triangle's face contact appears in the
-  // crease 0.135 mm deep and the force jumps to 3.35 N in one step. The bound is that figure's.
+  // Not within 10 % of the threshold here (docs/suturing.md, "The needle through tissue", "An
+  // organ given by its material"): the soft slab dimples under the tip, which slides down the
+  // dimple's side (the force along the needle falls from 0.75 N), until a triangle's face contact
+  // appears in the crease 0.135 mm deep and the force jumps to 3.35 N in one step. The bound is
+  // that figure's; on 1 mm cubes it punctures at 1.018 N (measured, too slow for a test).
   EXPECT_GE(p.puncture_force, kPunctureThreshold);
   EXPECT_LT(p.puncture_force, 4.0 * kPunctureThreshold);
 }
