@@ -1,5 +1,5 @@
 /// @file thread_figures_test.cpp
-/// The thread's model chosen by measurement (docs/suturing.md, "Which model: measured"): numen's
+/// The thread's model chosen by measurement (docs/thread.md, "Which model: measured"): numen's
 /// thread (backward Euler by Newton on a banded system, thread.hpp) against XPBD
 /// (tests/support/thread_xpbd.hpp) on the same 3-0 silk thread: stretch under 2 N of end
 /// tension, the largest stretch of a thread swinging from horizontal at 0.1, 1 and 10 ms, and

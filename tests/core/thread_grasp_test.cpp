@@ -1,6 +1,6 @@
 // Tests of a thread in a grasper's jaws (core/src/grasp/grasp_thread.cpp: which nodes the jaws
 // take; core/src/thread/thread_grasp.cpp: their springs in the thread's implicit step;
-// docs/suturing.md "The thread in the jaws"): the jaws close on a thread lying on a plane and
+// docs/thread.md "The thread in the jaws"): the jaws close on a thread lying on a plane and
 // lift it, the held node follows them and the rest of the thread follows it, the tension next to
 // the jaws is the grip's pull, opening lets it go (it falls freely from where it was let go), a
 // pull past the grip's limit slips, and holding allocates nothing.

@@ -1,5 +1,5 @@
 /// @file thread_knot_test.cpp
-/// A knot in the suture thread (core/include/numen/core/thread.hpp; docs/suturing.md "A knot"):
+/// A knot in the suture thread (core/include/numen/core/thread.hpp; docs/thread.md "A knot"):
 /// an overhand knot laid open in a 3-0 silk thread, its two ends pulled apart by
 /// the hands until the knot holds a stated tension, then held. Whether it is still a knot is
 /// read from the thread itself by a knot invariant (the determinant of its projection, 3 for the
@@ -258,7 +258,7 @@ TEST(ThreadKnot, TheKnotDeterminantTellsAKnotFromNone) {
 // held still 2 s: it is still a trefoil in every view, the pull stays at or above 1.9 N and
 // steady (a knot that slipped through itself leaves the thread straight and slack between the
 // hands), the strands' nodes are never closer than their diameter less a tenth, and nothing
-// breaks. Stated conditions (docs/suturing.md "A knot"): the self contact's stiffness 1e5 N/m
+// breaks. Stated conditions (docs/thread.md "A knot"): the self contact's stiffness 1e5 N/m
 // (at the material's default 1e4 N/m the strands pull through each other, below), and the
 // thread's drag 100 N·s/m², an overdamped thread: at a drag of 3 N·s/m² and below the slack,
 // light thread's Newton iteration does not converge and the knot comes apart or breaks.
@@ -314,7 +314,7 @@ TEST(ThreadKnot, WithoutAStiffSelfContactTheKnotComesUndone) {
   }
 }
 
-// The knot across the self contact's stiffness and the thread's drag (docs/suturing.md "A
+// The knot across the self contact's stiffness and the thread's drag (docs/thread.md "A
 // knot"; label figures, ~30 s): the rig above pulled to 2 N and held 1 s at each of 1e5, 3e5 and
 // 1e6 N/m and a drag of 1e-3 (the default), 3, 10 and 100 N·s/m². Printed as a table: whether it
 // is still a trefoil and whole, and the held pull's range over the last 0.5 s. Checked: at 100 it

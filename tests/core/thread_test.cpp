@@ -305,7 +305,7 @@ TEST(Thread, EyeletFrictionIsCoulombs) {
 
 // A soft thread (bending negligible) tied at both ends and laid over itself, one strand along y
 // 1 mm above another along x, the upper strand pressed down by 10 µN a node through a viscous
-// medium: the strands touch and never pass (docs/suturing.md: a crossing faster than ~r a step
+// medium: the strands touch and never pass (docs/thread.md: a crossing faster than ~r a step
 // is not yet held).
 TEST(Thread, SelfContactKeepsStrandsApart) {
   const Vec3 corners[] = {Vec3(0.0, -0.03, 1e-3), Vec3(0.0, 0.02, 1e-3), Vec3(0.02, 0.02, 0.0),

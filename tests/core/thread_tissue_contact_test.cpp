@@ -1,5 +1,5 @@
 // Tests of a thread lying on tissue (core/src/thread/thread_tissue_contact.cpp; thread.hpp
-// "Couplings"; docs/suturing.md "The thread on tissue"): a heavy thread dropped on a patch of
+// "Couplings"; docs/thread.md "The thread on tissue"): a heavy thread dropped on a patch of
 // tissue comes to rest on its surface — on its fine surface where the net carries one — and the
 // tissue carries exactly its weight through the contacts' springs on its nodes (the reaction is
 // the contact's, reversed); nodes deep under the surface (a passage) are left alone; no
@@ -162,7 +162,7 @@ TEST(ThreadTissueContact, OnAFineSurfaceTheThreadLiesOnItNotOnTheNetUnderIt) {
   EXPECT_EQ(s.allocations, 0u);
   EXPECT_GE(s.contacts, 15);
   EXPECT_EQ(s.dropped, 0);
-  // At rest but for a jitter of a few micrometres (docs/suturing.md, "The thread on tissue": the
+  // At rest but for a jitter of a few micrometres (docs/thread.md, "The thread on tissue": the
   // fine surface's offsets turn with the net's triangles, which the contact's point on the net
   // does not).
   EXPECT_LT(s.wander, 2e-5) << "m";

@@ -1,4 +1,4 @@
-// Tests of core/thread through tissue (thread.hpp "Through tissue"; docs/suturing.md "The thread
+// Tests of core/thread through tissue (thread.hpp "Through tissue"; docs/thread.md "The thread
 // through tissue"): an eyelet on a net's material point holds the thread across and drags it along,
 // and gives its force back to the tissue (pulled sideways, dragged along), where an eyelet at a
 // point the caller moves leaves the tissue alone; a needle driven through the patch hands its

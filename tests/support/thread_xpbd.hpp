@@ -1,6 +1,6 @@
 #pragma once
 /// @file thread_xpbd.hpp
-/// The candidate the thread's model was measured against (docs/suturing.md, "Which model:
+/// The candidate the thread's model was measured against (docs/thread.md, "Which model:
 /// measured"): a position-based thread stepped by XPBD (Macklin, Müller & Chentanez 2016,
 /// "XPBD: position-based simulation of compliant constrained dynamics", Eq. 18 and 26):
 /// distance constraints between neighbouring nodes of compliance α = l0 / (E A), bending as

@@ -286,7 +286,7 @@ void update_grasps(const Model& model, Data& data) noexcept {
     } else if (st.armed && st.opening < g.close_angle) {
       try_grasp(model, data, g, st);
       // A thread before tissue: a thread lying on tissue between the jaws is taken, not the
-      // tissue under it (docs/suturing.md "The thread in the jaws").
+      // tissue under it (docs/thread.md "The thread in the jaws").
       if (!st.holding() && g.thread && !model.threads.empty() && take_thread(model, data, g, st)) begin_grasp(st, data.time);
       if (!st.holding() && g.tissue && model.num_nets() > 0) try_grasp_tissue(model, data, g, st);
     }

@@ -1,5 +1,5 @@
 /// @file grasp_thread.cpp
-/// A grasper's jaws closing on a thread (grasp/grasp_thread.hpp, docs/suturing.md "The thread in
+/// A grasper's jaws closing on a thread (grasp/grasp_thread.hpp, docs/thread.md "The thread in
 /// the jaws"): which segments both jaws touch, and which of their nodes the grasp holds. The
 /// springs themselves are the thread's step's (thread/thread_grasp.cpp).
 

@@ -1,7 +1,7 @@
 #pragma once
 /// @file grasp_thread.hpp
 /// The grasp stage's search for a thread between a grasper's jaws (grasp.hpp, GraspThreadNode;
-/// docs/suturing.md "The thread in the jaws"). Private to numen::core.
+/// docs/thread.md "The thread in the jaws"). Private to numen::core.
 
 namespace numen::core {
 

@@ -1,6 +1,6 @@
 /// @file thread_grasp.cpp
 /// A thread in a grasper's jaws, on the thread's side (thread/thread_terms.hpp; grasp.hpp
-/// GraspThreadNode; docs/suturing.md "The thread in the jaws"): each held node's springs to the
+/// GraspThreadNode; docs/thread.md "The thread in the jaws"): each held node's springs to the
 /// jaws as point terms of the thread's implicit step. Which nodes are held is the grasp stage's
 /// (grasp/grasp_thread.cpp).
 

@@ -41,7 +41,7 @@ void fill_contact(ThreadPointTerm& term, const MaterialPair& mp, double stiffnes
 void gather_thread_body_contacts(const Model& model, const Data& data, int index, const ThreadModel& thread,
                                  ThreadState& state, ThreadScratch& scratch) noexcept;
 
-/// The thread in the jaws (grasp.hpp GraspThreadNode, docs/suturing.md "The thread in the
+/// The thread in the jaws (grasp.hpp GraspThreadNode, docs/thread.md "The thread in the
 /// jaws"): for each grasp holding thread `index` (GraspState::thread), each held node's springs
 /// to both jaws — half the grasper's stiffness and damping each, towards the node's place at the
 /// grasp's start in the jaw's frame, the jaw's point moving as given — as point terms whose

@@ -1,5 +1,5 @@
 /// @file thread_tissue.cpp
-/// A thread through tissue (thread.hpp, "Through tissue"; docs/suturing.md "The thread through
+/// A thread through tissue (thread.hpp, "Through tissue"; docs/thread.md "The thread through
 /// tissue"): the puncture points its needle lets go past the tail taken over as eyelets on the
 /// net's material points, those eyelets moved with the net's nodes, and their forces given back
 /// to the nodes as held node springs in the nets' implicit step.

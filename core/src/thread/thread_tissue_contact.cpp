@@ -1,5 +1,5 @@
 /// @file thread_tissue_contact.cpp
-/// A thread lying on tissue (thread.hpp, "Couplings"; docs/suturing.md "The thread on tissue"):
+/// A thread lying on tissue (thread.hpp, "Couplings"; docs/thread.md "The thread on tissue"):
 /// its nodes' penalty contacts with the nets' surface triangles as point terms of its implicit
 /// step, and their reactions given back to the triangles' nodes as held node springs in the
 /// nets' implicit step, as an eyelet's on tissue (thread_tissue.cpp).

@@ -101,7 +101,7 @@ void parse_threads(const TomlTable& root, Scene& scene) {
                                   " m), the longest path the needle makes through tissue: pulled through, the "
                                   "thread would end inside it; give it a length of at least the needle's arc")
                 .what());
-    // Placed inside tissue: a thread touches the nets' surfaces from outside (docs/suturing.md,
+    // Placed inside tissue: a thread touches the nets' surfaces from outside (docs/thread.md,
     // "The thread on tissue") and goes into tissue only behind a needle.
     if constexpr (core::kWithDeformable) {
       const core::Vec3 dir = th.direction.normalized();

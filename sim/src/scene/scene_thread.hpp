@@ -1,7 +1,6 @@
 #pragma once
 /// @file scene_thread.hpp
-/// The [[thread]] tables of a scene file (docs/suturing.md "The
-/// thread"): suture threads compiled into Model::threads (core/include/numen/core/thread.hpp).
+/// The [[thread]] tables of a scene file (docs/thread.md): suture threads compiled into Model::threads (core/include/numen/core/thread.hpp).
 /// Private to numen::sim (used by scene.cpp, after the bodies are read).
 
 #include "numen/sim/scene/scene.hpp"

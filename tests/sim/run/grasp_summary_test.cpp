@@ -38,7 +38,7 @@ TEST(GraspSummary, AnEventReadsAsTimeWhatWhoAndWhat) {
             "8.611 s slip grasper: organ (4 nodes, pull 5.005 N)");
   EXPECT_EQ(numen::sim::format_grasp_event(m, g, {1.0, GraspEvent::kRelease, 1, -1, 10, 0.25}),
             "1.000 s release grasper: block (10 grip springs, pull 0.250 N)");
-  // A thread (docs/suturing.md, "The thread in the jaws"): named, or by index without a name.
+  // A thread (docs/thread.md, "The thread in the jaws"): named, or by index without a name.
   EXPECT_EQ(numen::sim::format_grasp_event(m, g, {2.5, GraspEvent::kGrasp, -1, -1, 3, 0.0, 0}),
             "2.500 s grasp grasper: thread suture (3 nodes)");
   EXPECT_EQ(numen::sim::format_grasp_event(m, g, {2.75, GraspEvent::kSlip, -1, -1, 2, 0.5123, 1}),

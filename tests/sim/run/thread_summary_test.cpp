@@ -1,5 +1,5 @@
 // Tests of sim/run/thread_summary: the suture threads of a run in its summary
-// (docs/suturing.md "The thread", docs/outputs.md `thread.*`).
+// (docs/thread.md "The thread", docs/outputs.md `thread.*`).
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Tests of sim/scene/scene_thread: the [[thread]] keys of a scene file and their located errors —
 // a thread of zero or negative length or segments, a bad material value, an unknown body or key,
-// a thread that starts inside tissue (docs/suturing.md "Scene keys"). On the shipped probe scene,
+// a thread that starts inside tissue (docs/thread.md "Scene keys (`[[thread]]`)"). On the shipped probe scene,
 // which has no joints, so these run in every build (the one with tissue where there are nets).
 
 #include <gtest/gtest.h>

@@ -20,7 +20,7 @@
 /// held body and the instrument are one implicit system (no stiffness limit from the step).
 ///
 /// A suture thread between the jaws (no body touched) is held at its nodes by springs to both
-/// jaws in the thread's own implicit step (GraspThreadNode; docs/suturing.md "The thread in the
+/// jaws in the thread's own implicit step (GraspThreadNode; docs/thread.md "The thread in the
 /// jaws"); tissue, when neither a body nor a thread is touched, at its nodes in the nets' step.
 
 #include <array>
@@ -43,7 +43,7 @@ inline constexpr int kMaxGraspPoints = 2 * kGripPointsPerJaw;
 inline constexpr int kMaxGraspNodes = 16;
 /// Node contacts' room for the grasp springs of held nodes: three per node (NodeContact::held).
 inline constexpr int kGraspSpringsPerNode = 3;
-/// Thread nodes one grasp holds at most (docs/suturing.md "The thread in the jaws"): the nodes of
+/// Thread nodes one grasp holds at most (docs/thread.md "The thread in the jaws"): the nodes of
 /// the segments both jaws touch, the nearest to the pinch's centre first. A thread across a jaw
 /// gives 2–4 (a 3 mm jaw sphere over 1.5 mm segments of the default 3-0 thread); laid along a
 /// jaw of 9 mm of spheres (the graspers' jaws), about 8: each node's spring is the grasper's, so
@@ -75,7 +75,7 @@ struct GraspModel {
   /// tied to them (GraspState::nodes).
   bool tissue = true;
   /// Grasp a suture thread when the jaws touch no body: the nodes of the segments both jaws
-  /// touch are tied to them (GraspState::thread_nodes; docs/suturing.md "The thread in the jaws").
+  /// touch are tied to them (GraspState::thread_nodes; docs/thread.md "The thread in the jaws").
   bool thread = true;
 };
 

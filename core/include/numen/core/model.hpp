@@ -297,7 +297,7 @@ struct Model {
   std::vector<std::int32_t> node_spring_begin;
   std::vector<std::int32_t> node_springs;
 
-  /// Suture threads (thread.hpp, docs/suturing.md "The thread"); empty: no thread stage.
+  /// Suture threads (thread.hpp, docs/thread.md "The thread"); empty: no thread stage.
   std::vector<ThreadModel> threads;
 
   /// Graspers (grasp.hpp, docs/grasping.md): an instrument's two jaws and their grasp rules.

@@ -35,7 +35,7 @@ inline constexpr int kMaxNeedlePunctures = 2;
 inline constexpr int kNeedleTieSprings = 9;
 
 /// One puncture point: a material point of a net's surface tied to the needle's arc. Written by
-/// the needle stages (NeedleState::punctures). What the thread (docs/suturing.md, "The thread")
+/// the needle stages (NeedleState::punctures). What the thread (docs/thread.md, "The thread")
 /// reads: `position`, `tangent`, `friction`.
 struct NeedlePuncture {
   int net = -1;                    ///< The punctured net (Model::nets).

@@ -1,6 +1,6 @@
 #pragma once
 /// @file thread.hpp
-/// A suture thread (issue 69, docs/suturing.md "The thread"): an elastic rod as a chain of
+/// A suture thread (issue 69, docs/thread.md "The thread"): an elastic rod as a chain of
 /// `segments` straight segments between `segments + 1` nodes (point masses), stepped by the
 /// linearly implicit Euler the rest of numen uses (Baraff & Witkin 1998) with one block-banded
 /// solve per step (3×3 blocks, block bandwidth 2: O(n), linalg/thread_band.hpp).
@@ -14,7 +14,7 @@
 ///     constant Hessian, invariant under rigid motions (the quadratic bending model of
 ///     Bergou et al. 2006, "A quadratic bending model for inextensible surfaces", on a curve);
 ///   - gravity, and a viscous drag `damping` (N·s/m per metre of thread) against the world.
-/// No twist: a round thread without a knot's twist coupling does not need it (docs/suturing.md).
+/// No twist: a round thread without a knot's twist coupling does not need it (docs/thread.md).
 ///
 /// Couplings (step_threads(), in the step's body-force stage): an end tied to a point of a
 /// rigid body (ThreadTie; the body's translational effective mass at the point is in the
@@ -27,9 +27,9 @@
 /// points the thread slides through with friction along it (ThreadEyelet, written by the
 /// caller before each step, or taken over from a needle's punctures), and a grasper's jaws
 /// holding some of its nodes (GraspThreadNode, grasp.hpp: springs to the jaws' points, the
-/// reaction on the jaws; docs/suturing.md "The thread in the jaws").
+/// reaction on the jaws; docs/thread.md "The thread in the jaws").
 ///
-/// Through tissue (docs/suturing.md "The thread through tissue"): a thread whose start is tied
+/// Through tissue (docs/thread.md "The thread through tissue"): a thread whose start is tied
 /// to a needle (ThreadModel::needle) takes over each puncture point the needle lets go past its
 /// tail (NeedleState::tail_releases) as an eyelet on that material point of the net's surface
 /// (ThreadEyelet::face): the eyelet moves with the net's nodes, and its force goes back to them
@@ -85,7 +85,7 @@ struct ThreadTie {
 /// The settings of one thread (Model::threads). Default: a 3-0 silk suture (USP 3-0
 /// non-absorbable diameter 0.200–0.249 mm, USP <861>; initial modulus 8.70 GPa, Naleway et al.
 /// 2015, "Mechanical properties of suture materials in general and cutaneous surgery", J.
-/// Biomed. Mater. Res. B 103(4)), docs/suturing.md.
+/// Biomed. Mater. Res. B 103(4)), docs/thread.md.
 struct ThreadModel {
   std::string name;
   double length = 0.15;            ///< Rest length (m), > 0.
@@ -106,7 +106,7 @@ struct ThreadModel {
   /// Coulomb μ (≥ 0) of the thread sliding through a puncture point it takes over from its
   /// needle. Chosen, not measured: suture–tissue friction depends on the load, the speed and the
   /// suture (Zhang et al. 2017, "Friction Behavior at the Interface Between Surgical Sutures and
-  /// Tissues", Tribol. Lett. 65:4, braided silk the highest); docs/suturing.md.
+  /// Tissues", Tribol. Lett. 65:4, braided silk the highest); docs/thread.md.
   double tissue_friction = 0.3;
   /// Coulomb μ (≥ 0) between two strands of the thread in self contact: a strand sliding over
   /// another is held back by μ |F_n| (regularised to viscous below kThreadSelfSlipSpeed), what

@@ -35,7 +35,7 @@ namespace numen::platform {
 inline constexpr char kStateFrameMagic[4] = {'N', 'M', 'V', 'F'};
 /// Version written by encode_state_frame() and the only one decode_state_frame() accepts.
 /// 5: the suture threads (num_threads, num_thread_nodes, thread, thread_node; issue 69).
-/// 6: a grasp item's held thread (its ninth float; docs/suturing.md "The thread in the jaws").
+/// 6: a grasp item's held thread (its ninth float; docs/thread.md "The thread in the jaws").
 inline constexpr std::uint16_t kStateFrameVersion = 6;
 /// Size of the fixed header, bytes.
 inline constexpr std::size_t kStateFrameHeaderBytes = 84;

@@ -313,7 +313,7 @@ struct RunSummary {
   /// Steps whose device target was not finite (core::Data::invalid_target_steps): coupling
   /// skipped, feedback held at its last value.
   std::int64_t invalid_target_steps = 0;
-  // Suture threads (docs/suturing.md; accumulate_thread_figures(), summarize_threads()).
+  // Suture threads (docs/thread.md; accumulate_thread_figures(), summarize_threads()).
   bool threads = false;                  ///< The scene has a thread ([[thread]]).
   double thread_tension_max_n = 0.0;     ///< Largest segment tension of any thread over the run (N).
   double thread_stretch_max = 0.0;       ///< Largest segment strain of any thread over the run.

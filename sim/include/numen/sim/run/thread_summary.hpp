@@ -1,6 +1,6 @@
 #pragma once
 /// @file thread_summary.hpp
-/// The suture threads of a run in its summary (docs/suturing.md "The thread", docs/outputs.md
+/// The suture threads of a run in its summary (docs/thread.md "The thread", docs/outputs.md
 /// `thread.*`): the largest tension and stretch over the run, and the breaks.
 
 #include "numen/core/data.hpp"
