@@ -74,8 +74,11 @@ TEST(TissueDimple, ASpherePressedIntoAFlatSurfaceDimplesItAndNoVertexIsLeftInsid
     EXPECT_EQ(p.y(), before[k].y());
     EXPECT_GE((p - spheres[0].centre).norm(), r - 1e-15) << k;
     const double rho = std::hypot(p.x(), p.y());
-    if (rho >= reach) EXPECT_EQ(p.z(), 0.0) << rho;
-    else if (rho > 1.05 * a) EXPECT_NEAR(-p.z(), numen::sim::hertz_surface_displacement(rho, r, depth) - floor, 1e-15) << rho;
+    if (rho >= reach) {
+      EXPECT_EQ(p.z(), 0.0) << rho;
+    } else if (rho > 1.05 * a) {
+      EXPECT_NEAR(-p.z(), numen::sim::hertz_surface_displacement(rho, r, depth) - floor, 1e-15) << rho;
+    }
   }
 }
 
