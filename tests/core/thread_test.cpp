@@ -465,11 +465,15 @@ TEST(Thread, LiesOnAMeshAndOnASphereSetNotThroughThem) {
     });
     core::Data d = core::make_data(m);
     int contacts = 0;
+    std::uint64_t allocations = 0;
     for (int i = 0; i < 1000; ++i) {
+      test::AllocationGuard guard;
       core::step(m, d);
+      allocations += guard.count();
       EXPECT_EQ(d.status & core::kNonFinite, 0u) << "step " << i;
       contacts = d.threads[0].output.obstacle_contacts;
     }
+    EXPECT_EQ(allocations, 0u) << (mesh ? "mesh" : "sphere set");
     // How deep any node's sphere is in the obstacle.
     double deepest = 0.0;
     const double r = m.threads[0].radius;
