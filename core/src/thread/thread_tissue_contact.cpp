@@ -20,6 +20,7 @@
 #include "thread/thread_terms.hpp"
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/net_surface_map.hpp"
 #include "numen/core/thread.hpp"
@@ -174,37 +175,39 @@ void find_tissue_hits(const Model& model, const Data& data, const ThreadModel& t
         });
         continue;
       }
-      // The fine triangles riding on f (one riding on several is touched from each: a hit keeps
-      // the deepest), if a node of the thread is within their reach of f's bounds.
-      bool near = false;
-      nodes_near(st, scratch, axis, a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c),
-                 reach + net.surface_reach, [&](int, const Vec3&) { near = true; });
-      if (!near) continue;
-      const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
-      const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
-      for (std::size_t k = first; k < last; ++k) {
-        const std::array<int, 3>& ft = model.net_surface_faces[static_cast<std::size_t>(model.net_face_surface_faces[k])];
-        const Vec3 p[3] = {net_surface_position(model, nodes, ft[0]), net_surface_position(model, nodes, ft[1]),
-                           net_surface_position(model, nodes, ft[2])};
-        const Vec3 flo = p[0].cwiseMin(p[1]).cwiseMin(p[2]), fhi = p[0].cwiseMax(p[1]).cwiseMax(p[2]);
-        const Vec3 cross = (p[1] - p[0]).cross(p[2] - p[0]);
-        const double area2 = cross.norm();
-        if (!(area2 > 0.0) || !flo.allFinite() || !fhi.allFinite()) continue;
-        const Vec3 n = cross / area2;
-        nodes_near(st, scratch, axis, flo, fhi, reach, [&](int i, const Vec3& x) {
-          touch_triangle(x, rt, net.material, p[0], p[1], p[2], n, scratch.tissue_hits[static_cast<std::size_t>(i)],
-                         [&](const Vec3& q, const Vec3& w, int& face, Vec3& weights) {
-                           int m = 0;  // the corner nearest q carries it: its net triangle, q's foot there
-                           if (w[1] > w[m]) m = 1;
-                           if (w[2] > w[m]) m = 2;
-                           face = model.net_surface_points[static_cast<std::size_t>(ft[static_cast<std::size_t>(m)])].face;
-                           const std::array<int, 3>& nt = model.net_faces[static_cast<std::size_t>(face)];
-                           int feature = detail::kFace;
-                           detail::closest_on_triangle(q, nodes[static_cast<std::size_t>(nt[0])].position,
-                                                       nodes[static_cast<std::size_t>(nt[1])].position,
-                                                       nodes[static_cast<std::size_t>(nt[2])].position, feature, weights);
-                         });
-        });
+      if constexpr (kWithDeformable) {  // the fine surface's map is a net's (core/src/net/)
+        // The fine triangles riding on f (one riding on several is touched from each: a hit keeps
+        // the deepest), if a node of the thread is within their reach of f's bounds.
+        bool near = false;
+        nodes_near(st, scratch, axis, a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c),
+                   reach + net.surface_reach, [&](int, const Vec3&) { near = true; });
+        if (!near) continue;
+        const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
+        const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
+        for (std::size_t k = first; k < last; ++k) {
+          const std::array<int, 3>& ft = model.net_surface_faces[static_cast<std::size_t>(model.net_face_surface_faces[k])];
+          const Vec3 p[3] = {net_surface_position(model, nodes, ft[0]), net_surface_position(model, nodes, ft[1]),
+                             net_surface_position(model, nodes, ft[2])};
+          const Vec3 flo = p[0].cwiseMin(p[1]).cwiseMin(p[2]), fhi = p[0].cwiseMax(p[1]).cwiseMax(p[2]);
+          const Vec3 cross = (p[1] - p[0]).cross(p[2] - p[0]);
+          const double area2 = cross.norm();
+          if (!(area2 > 0.0) || !flo.allFinite() || !fhi.allFinite()) continue;
+          const Vec3 n = cross / area2;
+          nodes_near(st, scratch, axis, flo, fhi, reach, [&](int i, const Vec3& x) {
+            touch_triangle(x, rt, net.material, p[0], p[1], p[2], n, scratch.tissue_hits[static_cast<std::size_t>(i)],
+                           [&](const Vec3& q, const Vec3& w, int& face, Vec3& weights) {
+                             int m = 0;  // the corner nearest q carries it: its net triangle, q's foot there
+                             if (w[1] > w[m]) m = 1;
+                             if (w[2] > w[m]) m = 2;
+                             face = model.net_surface_points[static_cast<std::size_t>(ft[static_cast<std::size_t>(m)])].face;
+                             const std::array<int, 3>& nt = model.net_faces[static_cast<std::size_t>(face)];
+                             int feature = detail::kFace;
+                             detail::closest_on_triangle(q, nodes[static_cast<std::size_t>(nt[0])].position,
+                                                         nodes[static_cast<std::size_t>(nt[1])].position,
+                                                         nodes[static_cast<std::size_t>(nt[2])].position, feature, weights);
+                           });
+          });
+        }
       }
     }
   }
