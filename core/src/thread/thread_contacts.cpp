@@ -109,6 +109,10 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
       for (int s = std::max(first, 0); s < last; ++s) {
         if (hold != nullptr && next_to_held_node(*hold, s)) continue;
         const auto i = static_cast<std::size_t>(s);
+        // A segment whose bounds are farther than the reach from the centre on an axis is
+        // farther than it in all (the test below would leave it): the bounds first, cheaper.
+        const auto xa = st.position[i].array(), xb = st.position[i + 1].array();
+        if ((c.array() + reach < xa.min(xb)).any() || (c.array() - reach > xa.max(xb)).any()) continue;
         const double u = segment_parameter(st.position[i], st.position[i + 1], c);
         const SegmentPoint p = segment_point(st, s, u);
         const Vec3 d = p.x - c;
