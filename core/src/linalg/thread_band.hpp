@@ -24,7 +24,16 @@ struct ThreadBand {
   /// Zeroes the matrix and the right-hand side. No allocation.
   void clear() noexcept;
   /// Adds `m` to A(i, j) (and mᵀ to A(j, i)), |i − j| ≤ 2; i == j adds m to the diagonal.
-  void add(int i, int j, const Mat3& m) noexcept;
+  /// Inline: the thread's step calls it for every term of every Newton iteration.
+  void add(int i, int j, const Mat3& m) noexcept {
+    if (i == j) {
+      diag[static_cast<std::size_t>(i)] += m;
+    } else if (i > j) {
+      (i - j == 1 ? lower1 : lower2)[static_cast<std::size_t>(i)] += m;
+    } else {
+      (j - i == 1 ? lower1 : lower2)[static_cast<std::size_t>(j)] += m.transpose();
+    }
+  }
   /// Factors A = L Lᵀ and overwrites rhs with A⁻¹ b. false if a pivot block is not positive
   /// definite (rhs is then unspecified). No allocation.
   bool solve() noexcept;

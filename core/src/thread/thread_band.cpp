@@ -50,16 +50,6 @@ void ThreadBand::clear() noexcept {
   }
 }
 
-void ThreadBand::add(int i, int j, const Mat3& m) noexcept {
-  if (i == j) {
-    diag[static_cast<std::size_t>(i)] += m;
-  } else if (i > j) {
-    (i - j == 1 ? lower1 : lower2)[static_cast<std::size_t>(i)] += m;
-  } else {
-    (j - i == 1 ? lower1 : lower2)[static_cast<std::size_t>(j)] += m.transpose();
-  }
-}
-
 bool ThreadBand::solve() noexcept {
   // In place: diag[i] becomes L(i,i)⁻¹ (lower triangular), lower1/lower2 the factor's blocks.
   const std::size_t n = diag.size();
