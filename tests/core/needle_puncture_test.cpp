@@ -20,6 +20,7 @@
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 #include "needle_rig.hpp"
+#include "sanitizer.hpp"
 
 namespace {
 
@@ -135,6 +136,8 @@ TEST(NeedlePuncture, ThePassPuncturesAtTheThresholdSlidesAlongTheArcAndComesOut)
 }
 
 TEST(NeedlePuncture, ANeedlePuncturesAnOrganGivenByItsMaterial) {
+  // ~7 s here; past the 300 s bound under ASan + UBSan (CI's sanitizer step).
+  NUMEN_SKIP_UNDER_SANITIZER("two needle passes into a 1 125-node slab given by its material");
   // The pass above into a slab of tissue given by its material. The needle is sharp
   // (BodyModel::sharp): the organ meets it with the pair's penalty. With the two-scale law of a
   // blunt tool's sphere instead (net_tissue_contact.hpp), the 0.35 mm tip sinks two of its radii
