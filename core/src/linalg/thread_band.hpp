@@ -6,6 +6,8 @@
 /// by its block Cholesky factor L Lᵀ in place, O(n) (Golub & Van Loan, "Matrix Computations",
 /// 4th ed., §4.3.5, band Cholesky, here by 3×3 blocks). Sized once; no allocation afterwards.
 
+#include <algorithm>
+#include <cstdlib>
 #include <vector>
 
 #include "numen/core/types.hpp"
@@ -33,6 +35,15 @@ struct ThreadBand {
     } else {
       (j - i == 1 ? lower1 : lower2)[static_cast<std::size_t>(j)] += m.transpose();
     }
+  }
+  /// Adds `s` times the identity to A(i, j) (and to A(j, i)), |i − j| ≤ 2: add(i, j, s I) on the
+  /// three diagonal entries only (the others would gain a zero).
+  void add_identity(int i, int j, double s) noexcept {
+    Mat3& m = i == j ? diag[static_cast<std::size_t>(i)]
+                     : (std::abs(i - j) == 1 ? lower1 : lower2)[static_cast<std::size_t>(std::max(i, j))];
+    m(0, 0) += s;
+    m(1, 1) += s;
+    m(2, 2) += s;
   }
   /// Factors A = L Lᵀ and overwrites rhs with A⁻¹ b. false if a pivot block is not positive
   /// definite (rhs is then unspecified). No allocation.

@@ -124,7 +124,7 @@ void add_rod_terms(const Model& model, const ThreadModel& th, const ThreadState&
     const double share = (i == 0 || i == nodes - 1) ? 0.5 : 1.0;
     const double m = share * th.node_mass;
     const double drag = share * th.damping * th.rest_segment;
-    band.diag[u + 1] += (m + h * drag) * Mat3::Identity();
+    band.add_identity(i + 1, i + 1, m + h * drag);
     band.rhs[u + 1] += h * (m * model.gravity + st.external_force[u] - drag * v[u]) -
                        m * (v[u] - st.velocity[u]);
   }
@@ -155,7 +155,7 @@ void add_rod_terms(const Model& model, const ThreadModel& th, const ThreadState&
     for (int a = 0; a < 3; ++a) {
       band.rhs[u + static_cast<std::size_t>(a)] -= (h * kb * c[a]) * dx;
       for (int b = 0; b <= a; ++b)
-        band.add(i + a, i + b, (h * h * kb * c[a] * c[b]) * Mat3::Identity());
+        band.add_identity(i + a, i + b, h * h * kb * c[a] * c[b]);
     }
   }
 }
