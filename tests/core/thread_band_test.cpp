@@ -1,11 +1,13 @@
 /// @file thread_band_test.cpp
 /// The thread's block-banded solve (core/src/thread/thread_band.cpp, linalg/thread_band.hpp):
-/// its in-place block Cholesky against Eigen's dense LLᵀ on the same matrix, the refusal of a
-/// matrix that is not positive definite, and no allocation.
+/// its in-place block Cholesky against Eigen's dense LLᵀ on the same matrix, add_identity() as
+/// add() of a multiple of the identity, the refusal of a matrix that is not positive definite,
+/// and no allocation.
 
 #include <gtest/gtest.h>
 
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -76,6 +78,24 @@ TEST(ThreadBand, SolvesAsADenseCholeskyDoes) {
     Eigen::VectorXd x(3 * blocks);
     for (int i = 0; i < blocks; ++i) x.segment<3>(3 * i) = band.rhs[static_cast<std::size_t>(i)];
     EXPECT_LT((dense * x - rhs).cwiseAbs().maxCoeff(), 1e-12) << blocks << " blocks";
+  }
+}
+
+TEST(ThreadBand, AddIdentityIsAddOfAMultipleOfTheIdentity) {
+  core::ThreadBand a, b;
+  a.resize(5);
+  b.resize(5);
+  a.clear();
+  b.clear();
+  for (const auto& [i, j, s] : {std::tuple{2, 2, 1.5}, std::tuple{3, 2, -0.25}, std::tuple{2, 4, 3.0},
+                                std::tuple{1, 0, 2.0}, std::tuple{0, 2, -1.0}}) {
+    a.add_identity(i, j, s);
+    b.add(i, j, s * Mat3::Identity());
+  }
+  for (std::size_t k = 0; k < 5; ++k) {
+    EXPECT_EQ(a.diag[k], b.diag[k]) << k;
+    EXPECT_EQ(a.lower1[k], b.lower1[k]) << k;
+    EXPECT_EQ(a.lower2[k], b.lower2[k]) << k;
   }
 }
 
