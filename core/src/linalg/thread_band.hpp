@@ -25,22 +25,24 @@ struct ThreadBand {
   void resize(int blocks);
   /// Zeroes the matrix and the right-hand side. No allocation.
   void clear() noexcept;
+  /// The stored block that holds A(i, j), |i − j| ≤ 2, or its transpose: the lower half's, on
+  /// row max(i, j).
+  Mat3& lower_block(int i, int j) noexcept {
+    const int d = std::abs(i - j);
+    return (d == 0 ? diag : d == 1 ? lower1 : lower2)[static_cast<std::size_t>(std::max(i, j))];
+  }
   /// Adds `m` to A(i, j) (and mᵀ to A(j, i)), |i − j| ≤ 2; i == j adds m to the diagonal.
   /// Inline: the thread's step calls it for every term of every Newton iteration.
   void add(int i, int j, const Mat3& m) noexcept {
-    if (i == j) {
-      diag[static_cast<std::size_t>(i)] += m;
-    } else if (i > j) {
-      (i - j == 1 ? lower1 : lower2)[static_cast<std::size_t>(i)] += m;
-    } else {
-      (j - i == 1 ? lower1 : lower2)[static_cast<std::size_t>(j)] += m.transpose();
-    }
+    if (i >= j)
+      lower_block(i, j) += m;
+    else
+      lower_block(i, j) += m.transpose();
   }
   /// Adds `s` times the identity to A(i, j) (and to A(j, i)), |i − j| ≤ 2: add(i, j, s I) on the
   /// three diagonal entries only (the others would gain a zero).
   void add_identity(int i, int j, double s) noexcept {
-    Mat3& m = i == j ? diag[static_cast<std::size_t>(i)]
-                     : (std::abs(i - j) == 1 ? lower1 : lower2)[static_cast<std::size_t>(std::max(i, j))];
+    Mat3& m = lower_block(i, j);
     m(0, 0) += s;
     m(1, 1) += s;
     m(2, 2) += s;

@@ -109,10 +109,12 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
       for (int s = std::max(first, 0); s < last; ++s) {
         if (hold != nullptr && next_to_held_node(*hold, s)) continue;
         const auto i = static_cast<std::size_t>(s);
-        // A segment whose bounds are farther than the reach from the centre on an axis is
-        // farther than it in all (the test below would leave it): the bounds first, cheaper.
-        const auto xa = st.position[i].array(), xb = st.position[i + 1].array();
-        if ((c.array() + reach < xa.min(xb)).any() || (c.array() - reach > xa.max(xb)).any()) continue;
+        // A segment whose bounds miss the sphere's is out of its reach (the test below would
+        // leave it): the bounds first, cheaper.
+        const Vec3& xa = st.position[i];
+        const Vec3& xb = st.position[i + 1];
+        const Vec3 r3 = Vec3::Constant(reach);
+        if (!collision_detail::boxes_overlap(xa.cwiseMin(xb), xa.cwiseMax(xb), c - r3, c + r3)) continue;
         const double u = segment_parameter(st.position[i], st.position[i + 1], c);
         const SegmentPoint p = segment_point(st, s, u);
         const Vec3 d = p.x - c;
