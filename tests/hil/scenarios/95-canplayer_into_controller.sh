@@ -5,7 +5,7 @@
 # Pass: the controller runs the start-up against the replayed boot-ups and heartbeats and goes
 # active, it reads the replayed encoder frames (>= 90 % of them), and its last target pose (the
 # instrument pose from the last encoder frames) equals the recording run's within 1 mm
-# in each coordinate.
+# in each coordinate (inconclusive when a run's safe stop has a timing cause: lib.sh timing_cause).
 . /hil/lib.sh
 period_us=${HIL_PAIR_PERIOD_US:-1000}
 pair_scene "$period_us"
@@ -52,5 +52,14 @@ detail="period $period_us us; replayed $replayed frames ($encoders encoder TPDOs
 [ -n "$active" ] && [ "$active" -ge 0 ] ||
   fail_timing /tmp/play.txt "the controller never went active on the replay: $detail"
 [ "$rx" -ge $((replayed * 9 / 10)) ] || fail_timing /tmp/play.txt "replayed frames not read: $detail"
-awk -v g="$gap_mm" 'BEGIN { exit !(g != "" && g <= 1.0) }' || fail "the replayed pose differs: $detail"
+# A stall of the guest (an encoder timeout latched, samples went stale) ends a run's valid
+# samples early, at a pose the other run went past (CI 2026-12-01: the replay's input stalled
+# 0.85 s, 1.45 mm apart): inconclusive, as the timing of the guest explains it.
+if ! awk -v g="$gap_mm" 'BEGIN { exit !(g != "" && g <= 1.0) }'; then
+  for txt in /tmp/play.txt /tmp/rec.txt; do
+    first=$(first_fault "$txt")
+    [ -n "$first" ] && fail_premise "$first" "the replayed pose differs: $detail"
+  done
+  fail "the replayed pose differs: $detail"
+fi
 pass "$detail"
