@@ -16,6 +16,10 @@ namespace numen::core {
 
 struct ThreadModel;
 
+/// Segments a run of the contacts with bodies takes (thread_contacts.cpp): a body sphere meets
+/// a run's box before its segments' (200 segments: 25 runs).
+inline constexpr int kThreadSegmentRun = 8;
+
 /// A spring-damper between a point of the thread (w_a x_a + w_b x_b, blocks a, b of the band)
 /// and an outside point moving at `target_velocity` (a body's sphere, an obstacle, the other
 /// segment of a self-contact, an eyelet): force `force` on the thread point at the step's start,
@@ -96,6 +100,9 @@ struct ThreadScratch {
   std::array<Vec3, 2> tie_delta{};     ///< The ties' points' velocity change so far (m/s).
   std::vector<std::int32_t> sweep_order;  ///< Self contact: segments sorted along sweep_axis.
   std::vector<Vec3> segment_min, segment_max;  ///< Self contact: each segment's swept box (m).
+  /// Contacts with bodies: the box of each run of kThreadSegmentRun segments' nodes at the
+  /// step's start (m; thread_contacts.cpp).
+  std::vector<Vec3> run_min, run_max;
   std::vector<ThreadSelfPair> self_pairs;  ///< Capacity fixed at make_data().
   int num_self_pairs = 0;
   int sweep_axis = 0;

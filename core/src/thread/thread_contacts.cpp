@@ -85,10 +85,22 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
                                  ThreadState& st, ThreadScratch& scratch) noexcept {
   const int segs = thread.segments;
   const double rt = thread.radius;
-  Vec3 lo = st.position[0], hi = st.position[0];
-  for (const Vec3& x : st.position) {
-    lo = lo.cwiseMin(x);
-    hi = hi.cwiseMax(x);
+  // The box of each run of kThreadSegmentRun segments (its nodes), and the thread's.
+  const int runs = (segs + kThreadSegmentRun - 1) / kThreadSegmentRun;
+  for (int r = 0; r < runs; ++r) {
+    const int end = std::min(segs, (r + 1) * kThreadSegmentRun);
+    Vec3 rlo = st.position[static_cast<std::size_t>(r * kThreadSegmentRun)], rhi = rlo;
+    for (int i = r * kThreadSegmentRun + 1; i <= end; ++i) {
+      rlo = rlo.cwiseMin(st.position[static_cast<std::size_t>(i)]);
+      rhi = rhi.cwiseMax(st.position[static_cast<std::size_t>(i)]);
+    }
+    scratch.run_min[static_cast<std::size_t>(r)] = rlo;
+    scratch.run_max[static_cast<std::size_t>(r)] = rhi;
+  }
+  Vec3 lo = scratch.run_min[0], hi = scratch.run_max[0];
+  for (int r = 1; r < runs; ++r) {
+    lo = lo.cwiseMin(scratch.run_min[static_cast<std::size_t>(r)]);
+    hi = hi.cwiseMax(scratch.run_max[static_cast<std::size_t>(r)]);
   }
   for (int b = 0; b < model.num_bodies(); ++b) {
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
@@ -106,15 +118,23 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
       const double reach = sp.radius + rt;
       if (((c.array() + reach) < lo.array()).any() || ((c.array() - reach) > hi.array()).any())
         continue;
+      // A run, then a segment, whose bounds miss the sphere's is out of its reach (the test
+      // below would leave it): the bounds first, cheaper. The segments in their order.
+      const Vec3 r3 = Vec3::Constant(reach);
+      const Vec3 sphere_lo = c - r3, sphere_hi = c + r3;
       for (int s = std::max(first, 0); s < last; ++s) {
+        if (s % kThreadSegmentRun == 0) {
+          const auto run = static_cast<std::size_t>(s / kThreadSegmentRun);
+          if (!collision_detail::boxes_overlap(scratch.run_min[run], scratch.run_max[run], sphere_lo, sphere_hi)) {
+            s += kThreadSegmentRun - 1;  // the run's last segment: the loop's ++s starts the next run
+            continue;
+          }
+        }
         if (hold != nullptr && next_to_held_node(*hold, s)) continue;
         const auto i = static_cast<std::size_t>(s);
-        // A segment whose bounds miss the sphere's is out of its reach (the test below would
-        // leave it): the bounds first, cheaper.
         const Vec3& xa = st.position[i];
         const Vec3& xb = st.position[i + 1];
-        const Vec3 r3 = Vec3::Constant(reach);
-        if (!collision_detail::boxes_overlap(xa.cwiseMin(xb), xa.cwiseMax(xb), c - r3, c + r3)) continue;
+        if (!collision_detail::boxes_overlap(xa.cwiseMin(xb), xa.cwiseMax(xb), sphere_lo, sphere_hi)) continue;
         const double u = segment_parameter(st.position[i], st.position[i + 1], c);
         const SegmentPoint p = segment_point(st, s, u);
         const Vec3 d = p.x - c;

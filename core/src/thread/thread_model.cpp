@@ -99,6 +99,9 @@ void ThreadScratch::resize(const ThreadModel& t, int model_nodes, int graspers) 
   num_self_pairs = 0;
   segment_min.assign(static_cast<std::size_t>(t.segments), Vec3::Zero());
   segment_max.assign(static_cast<std::size_t>(t.segments), Vec3::Zero());
+  const auto runs = static_cast<std::size_t>((t.segments + kThreadSegmentRun - 1) / kThreadSegmentRun);
+  run_min.assign(runs, Vec3::Zero());
+  run_max.assign(runs, Vec3::Zero());
   sweep_axis = 0;
   tissue_hits.assign(nodes, ThreadTissueHit{});
   tissue_order.resize(nodes);
