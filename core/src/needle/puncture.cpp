@@ -12,6 +12,7 @@
 #include "numen/core/needle.hpp"
 #include "numen/core/step_stages.hpp"
 
+#include "contact/collision_query.hpp"
 #include "net/net_terms.hpp"
 
 namespace numen::core {
@@ -85,11 +86,24 @@ double sphere_parameter(const NeedleModel& n, int i) noexcept {
   return n.length() * static_cast<double>(i) / static_cast<double>(std::max(1, n.sphere_count - 1));
 }
 
-/// The first crossing of net `net`'s triangles by a → b: its face (−1: none) and weights.
+/// The first crossing of net `net`'s triangles by a → b: its face (−1: none) and weights. A
+/// triangle whose box misses the segment's (grown by kCrossingBoxSlack, the crossing test's
+/// rounding) is not crossed: the boxes first, cheaper than the test (about 1 000 triangles a
+/// step on the suturing pad, most far from the tip).
 int first_crossing(const Model& model, const Data& data, int net, const Vec3& a, const Vec3& b, Vec3* weights) noexcept {
+  constexpr double kCrossingBoxSlack = 1e-9;  // m
   const NetModel& nm = model.nets[static_cast<std::size_t>(net)];
-  for (int f = nm.face_begin; f < nm.face_begin + nm.face_count; ++f)
+  const Vec3 slack = Vec3::Constant(kCrossingBoxSlack);
+  const Vec3 lo = a.cwiseMin(b) - slack, hi = a.cwiseMax(b) + slack;
+  for (int f = nm.face_begin; f < nm.face_begin + nm.face_count; ++f) {
+    const std::array<int, 3>& v = model.net_faces[static_cast<std::size_t>(f)];
+    const Vec3& p0 = data.nodes[static_cast<std::size_t>(v[0])].position;
+    const Vec3& p1 = data.nodes[static_cast<std::size_t>(v[1])].position;
+    const Vec3& p2 = data.nodes[static_cast<std::size_t>(v[2])].position;
+    if (!collision_detail::boxes_overlap(p0.cwiseMin(p1).cwiseMin(p2), p0.cwiseMax(p1).cwiseMax(p2), lo, hi))
+      continue;
     if (segment_crosses_face(model, data, f, a, b, weights)) return f;
+  }
   return -1;
 }
 
