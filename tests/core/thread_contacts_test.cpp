@@ -1,18 +1,23 @@
 /// @file thread_contacts_test.cpp
-/// The thread's self contact (core/src/thread/thread_contacts.cpp): the friction between two
-/// strands (ThreadModel::self_friction) as the Newton system gets it, against Coulomb's law (what
-/// it does to a knot: tests/core/thread_knot_test.cpp).
+/// The thread's contacts (core/src/thread/thread_contacts.cpp): the friction between two strands
+/// (ThreadModel::self_friction) as the Newton system gets it, against Coulomb's law (what it does
+/// to a knot: tests/core/thread_knot_test.cpp); a body's spheres against the segments, found by
+/// runs of segments (kThreadSegmentRun) as one by one.
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "linalg/thread_band.hpp"
+#include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/step.hpp"
 #include "numen/core/thread.hpp"
 #include "scratch/thread_scratch.hpp"
 #include "thread/thread_terms.hpp"
+#include "thread_scenes.hpp"
 
 namespace numen {
 namespace {
@@ -92,6 +97,50 @@ TEST(ThreadContacts, TheFrictionBetweenStrandsIsCoulombs) {
   const PairTerms apart = pair_terms(k, mu, -1e-6, 0.01);  // not touching: nothing
   EXPECT_EQ(apart.touching, 0);
   EXPECT_EQ(apart.force.norm(), 0.0);
+}
+
+// A straight 24-segment thread (three runs of kThreadSegmentRun) and an anchored body's spheres
+// just above it: on the node between two runs (segments 7 and 8), within a segment of the
+// middle run (15), on the node between the last two runs (segments 15 and 16), on the last
+// segment (23), and on segment 1, next to the thread's tie to that body (the 3 segments next to
+// a tie do not touch the tied body). The first step finds the contacts a sphere-by-segment test
+// of every pair finds: 6.
+TEST(ThreadContacts, ABodysSpheresFindTheSegmentsTheyTouchAcrossTheRuns) {
+  ASSERT_EQ(core::kThreadSegmentRun, 8);  // the spheres below sit on its runs' edges
+  core::ThreadModel t;
+  t.segments = 24;
+  t.length = 0.024;  // 1 mm segments
+  const double ls = t.length / t.segments;
+  const double r = 0.3 * ls, lift = 0.2 * ls;
+  const std::vector<double> at = {8.0, 15.5, 16.0, 23.5, 1.5};  // along the thread, in segments
+  core::Model m = test::thread_model(t, [&](core::Model& mm) {
+    const int b = test::add_thread_test_body(mm, 0.01, 1e-6, Vec3::Zero(), 0.0);
+    core::BodyModel& body = mm.bodies[static_cast<std::size_t>(b)];
+    body.anchored = true;
+    body.sphere_begin = static_cast<int>(mm.body_spheres.size());
+    body.sphere_count = static_cast<int>(at.size());
+    for (const double a : at) mm.body_spheres.push_back({Vec3(a * ls, 0.0, lift), r});
+    mm.threads[0].tie_start.body = b;
+    mm.threads[0].tie_start.point = Vec3::Zero();
+    mm.threads[0].tie_end.body = -1;
+    mm.threads[0].tie_end.point = Vec3(t.length, 0.0, 0.0);
+  });
+  core::Data d = core::make_data(m);
+  // Every pair, one by one: the segment's closest point within the sphere's radius and the
+  // thread's, but for the tied body's 3 segments next to the tie.
+  const std::vector<Vec3> x = d.threads[0].position;
+  int expected = 0;
+  for (const double a : at) {
+    const Vec3 c(a * ls, 0.0, lift);
+    for (int s = 3; s < t.segments; ++s) {
+      const Vec3 p = x[static_cast<std::size_t>(s)], q = x[static_cast<std::size_t>(s) + 1];
+      const double u = std::clamp((c - p).dot(q - p) / (q - p).squaredNorm(), 0.0, 1.0);
+      expected += (p + u * (q - p) - c).norm() < r + m.threads[0].radius;
+    }
+  }
+  EXPECT_EQ(expected, 6);  // 2 + 1 + 2 + 1 + 0
+  core::step(m, d);
+  EXPECT_EQ(d.threads[0].output.body_contacts, expected);
 }
 
 }  // namespace
