@@ -87,14 +87,12 @@ double sphere_parameter(const NeedleModel& n, int i) noexcept {
 }
 
 /// The first crossing of net `net`'s triangles by a → b: its face (−1: none) and weights. A
-/// triangle whose box misses the segment's (grown by kCrossingBoxSlack, the crossing test's
-/// rounding) is not crossed: the boxes first, cheaper than the test (about 1 000 triangles a
-/// step on the suturing pad, most far from the tip).
+/// triangle whose box misses the segment's (boxes_overlap(), its margin covering the crossing
+/// test's rounding) is not crossed: the boxes first, cheaper than the test (about 1 000
+/// triangles a step on the suturing pad, most far from the tip).
 int first_crossing(const Model& model, const Data& data, int net, const Vec3& a, const Vec3& b, Vec3* weights) noexcept {
-  constexpr double kCrossingBoxSlack = 1e-9;  // m
   const NetModel& nm = model.nets[static_cast<std::size_t>(net)];
-  const Vec3 slack = Vec3::Constant(kCrossingBoxSlack);
-  const Vec3 lo = a.cwiseMin(b) - slack, hi = a.cwiseMax(b) + slack;
+  const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
   for (int f = nm.face_begin; f < nm.face_begin + nm.face_count; ++f) {
     const std::array<int, 3>& v = model.net_faces[static_cast<std::size_t>(f)];
     const Vec3& p0 = data.nodes[static_cast<std::size_t>(v[0])].position;

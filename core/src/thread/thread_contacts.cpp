@@ -116,12 +116,11 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
       const Sphere& sp = model.body_spheres[static_cast<std::size_t>(k)];
       const Vec3 c = bs.position + rot * sp.center;
       const double reach = sp.radius + rt;
-      if (((c.array() + reach) < lo.array()).any() || ((c.array() - reach) > hi.array()).any())
-        continue;
-      // A run, then a segment, whose bounds miss the sphere's is out of its reach (the test
-      // below would leave it): the bounds first, cheaper. The segments in their order.
+      // The thread, a run, then a segment, whose bounds miss the sphere's is out of its reach
+      // (the test below would leave it): the bounds first, cheaper. The segments in their order.
       const Vec3 r3 = Vec3::Constant(reach);
       const Vec3 sphere_lo = c - r3, sphere_hi = c + r3;
+      if (!collision_detail::boxes_overlap(lo, hi, sphere_lo, sphere_hi)) continue;
       for (int s = std::max(first, 0); s < last; ++s) {
         if (s % kThreadSegmentRun == 0) {
           const auto run = static_cast<std::size_t>(s / kThreadSegmentRun);
