@@ -369,6 +369,21 @@ TEST(NetSurfaceMap, PatchesSkipOnlyTheFineTrianglesNoSphereReaches) {
     multi += with.net_surface_clusters[static_cast<std::size_t>(pc)].parts > 1 ? 1 : 0;
   }
   EXPECT_GT(multi, 0) << "riders on two or three net triangles make patches of several records";
+  // A patch's riders are consecutive, as many as its first record says, within one net triangle.
+  std::vector<int> runs(with.net_surface_clusters.size(), 0);
+  for (std::size_t f = 0; f + 1 < with.net_face_surface_begin.size(); ++f)
+    for (auto k = static_cast<std::size_t>(with.net_face_surface_begin[f]);
+         k < static_cast<std::size_t>(with.net_face_surface_begin[f + 1]);) {
+      const std::int32_t pc = with.net_face_surface_cluster[k];
+      const int riders = with.net_surface_clusters[static_cast<std::size_t>(pc)].riders;
+      ASSERT_GT(riders, 0);
+      ASSERT_LE(k + static_cast<std::size_t>(riders), static_cast<std::size_t>(with.net_face_surface_begin[f + 1]));
+      for (int j = 0; j < riders; ++j) ASSERT_EQ(with.net_face_surface_cluster[k + static_cast<std::size_t>(j)], pc);
+      ++runs[static_cast<std::size_t>(pc)];
+      k += static_cast<std::size_t>(riders);
+    }
+  for (std::size_t pc = 0; pc < runs.size(); ++pc)
+    EXPECT_EQ(runs[pc], with.net_surface_clusters[pc].parts > 0 ? 1 : 0) << "patch " << pc;
   EXPECT_LT(with.net_surface_clusters.size(), with.net_face_surface_faces.size() / 4);
   core::Model without = with;
   std::fill(without.net_face_surface_cluster.begin(), without.net_face_surface_cluster.end(), -1);
@@ -406,12 +421,8 @@ TEST(NetSurfaceMap, PatchesSkipOnlyTheFineTrianglesNoSphereReaches) {
     }
     if (dw.num_node_contacts == 0) continue;
     ++touching;
-    const core::NetScratch& ns = dw.scratch->net;
-    for (std::size_t pc = 0; pc < ns.surface_cluster_stamp.size(); ++pc)
-      if (ns.surface_cluster_stamp[pc] == ns.surface_stamp && ns.surface_cluster_close[pc] == 0) {
-        ++skipping;
-        break;
-      }
+    skipping += dw.scratch->net.surface_patches_skipped > 0 ? 1 : 0;
+    EXPECT_EQ(dn.scratch->net.surface_patches_skipped, 0) << "trial " << trial;
   }
   std::printf("[fine surface patches] %d of 600 spheres touching, %d of them skipping a patch\n",
               touching, skipping);

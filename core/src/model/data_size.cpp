@@ -75,7 +75,7 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.face_candidates, n.face_lo, n.face_hi, n.node_outcode, n.surface_candidates, n.surface_lo,
            n.surface_hi, n.surface_sphere_mask, n.group_candidates, n.surface_face_slot, n.surface_face_stamp,
            n.surface_point_stamp, n.surface_position, n.surface_net_stamp, n.surface_net_torn,
-           n.surface_cluster_stamp, n.surface_cluster_close, n.rest_count, n.rest_flags, n.pass_position,
+           n.rest_count, n.rest_flags, n.pass_position,
            n.pass_velocity, n.still_flags, n.still_force, n.still_energy, n.active_nodes,
            n.active_positions, n.pass_positions, n.active_count, n.pass_count)};
   std::size_t threads = heap(d.needles, d.threads, scratch.threads);

@@ -153,8 +153,7 @@ void NetScratch::resize_contact_search(const Model& model, std::size_t n, std::s
   const std::size_t carriers = n > 0 && !model.net_surface_points.empty() ? model.net_faces.size() : 0;
   surface_net_stamp.assign(carriers, 0);
   surface_net_torn.assign(carriers, 0);
-  surface_cluster_stamp.assign(n > 0 ? model.net_surface_clusters.size() : 0, 0);
-  surface_cluster_close.assign(n > 0 ? model.net_surface_clusters.size() : 0, 0);
+  surface_patches_skipped = 0;
   surface_stamp = 0;
   std::size_t patch = 0;
   for (const NetModel& net : model.nets) patch = std::max(patch, net.surface_node_area.size());

@@ -464,10 +464,10 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     std::fill(ns.surface_face_stamp.begin(), ns.surface_face_stamp.end(), 0u);
     std::fill(ns.surface_point_stamp.begin(), ns.surface_point_stamp.end(), 0u);
     std::fill(ns.surface_net_stamp.begin(), ns.surface_net_stamp.end(), 0u);
-    std::fill(ns.surface_cluster_stamp.begin(), ns.surface_cluster_stamp.end(), 0u);
     ns.surface_stamp = 1;
   }
   const std::uint32_t stamp = ns.surface_stamp;
+  ns.surface_patches_skipped = 0;
   const double reach = net.surface_reach + kMargin;
   const Vec3 plo = qlo - Vec3::Constant(reach), phi = qhi + Vec3::Constant(reach);
   const int room = static_cast<int>(ns.surface_candidates.size());
@@ -517,49 +517,54 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     frame_ok = net_surface_frame(*corner_now[0], *corner_now[1], *corner_now[2], frame_now);
     const auto first = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f)]);
     const auto last = static_cast<std::size_t>(model.net_face_surface_begin[static_cast<std::size_t>(f) + 1]);
-    for (std::size_t k = first; k < last && nc < room; ++k) {
-      // A patch's triangle meets only the spheres that reach the patch (cluster_spheres(),
-      // judged once a call): the others' tests would find it out of their reach.
+    for (std::size_t k = first; k < last && nc < room;) {
+      // A patch's triangles (consecutive) meet only the spheres that reach the patch
+      // (cluster_spheres()): the others' tests would find them out of their reach. A patch is on
+      // this net triangle only, met once a call.
       std::uint64_t spheres = close;
+      std::size_t run_end = k + 1;
+      bool on_f_alone = false;  // a patch on f alone
       if (const std::int32_t pc = cluster_of[k]; pc >= 0) {
-        std::uint32_t& cst = ns.surface_cluster_stamp[static_cast<std::size_t>(pc)];
-        std::uint64_t& cbits = ns.surface_cluster_close[static_cast<std::size_t>(pc)];
-        if (cst != stamp) {
-          cst = stamp;
-          cbits = cluster_spheres(model, cs, near, nodes, pc, close, num_spheres);
+        const NetSurfaceCluster& patch = model.net_surface_clusters[static_cast<std::size_t>(pc)];
+        run_end = std::min(last, k + static_cast<std::size_t>(patch.riders));
+        on_f_alone = patch.parts == 1;
+        spheres = cluster_spheres(model, cs, near, nodes, pc, close, num_spheres);
+        if (spheres == 0) {
+          ++ns.surface_patches_skipped;
+          k = run_end;
+          continue;
         }
-        if (cbits == 0) continue;
-        spheres = cbits;
       }
-      const std::int32_t F = model.net_face_surface_faces[k];
-      std::uint32_t& st = ns.surface_face_stamp[static_cast<std::size_t>(F)];
-      std::int32_t& slot = ns.surface_face_slot[static_cast<std::size_t>(F)];
-      if (st == stamp) {  // gathered from another net triangle it rides on: its spheres too
-        if (slot >= 0) ns.surface_sphere_mask[static_cast<std::size_t>(slot)] |= spheres;
-        continue;
+      for (; k < run_end && nc < room; ++k) {
+        const std::int32_t F = model.net_face_surface_faces[k];
+        std::uint32_t& st = ns.surface_face_stamp[static_cast<std::size_t>(F)];
+        std::int32_t& slot = ns.surface_face_slot[static_cast<std::size_t>(F)];
+        if (st == stamp) {  // gathered from another net triangle it rides on: its spheres too
+          if (slot >= 0) ns.surface_sphere_mask[static_cast<std::size_t>(slot)] |= spheres;
+          continue;
+        }
+        st = stamp;
+        slot = -1;
+        const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(F)];
+        bool keep = true;
+        if (on_f_alone)  // its triangle's three vertices ride on f
+          keep = !is_torn(f);
+        else
+          for (int m = 0; m < 3 && keep; ++m)
+            keep = !is_torn(model.net_surface_points[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].face);
+        if (!keep) continue;
+        const Vec3& a = position(t[0]);
+        const Vec3& b = position(t[1]);
+        const Vec3& c = position(t[2]);
+        const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
+        if (!boxes_overlap(flo, fhi, qlo, qhi) || !finite(flo) || !finite(fhi)) continue;
+        ns.surface_candidates[static_cast<std::size_t>(nc)] = F;
+        ns.surface_lo[static_cast<std::size_t>(nc)] = flo;
+        ns.surface_hi[static_cast<std::size_t>(nc)] = fhi;
+        ns.surface_sphere_mask[static_cast<std::size_t>(nc)] = spheres;
+        slot = nc;
+        ++nc;
       }
-      st = stamp;
-      slot = -1;
-      const std::array<int, 3>& t = model.net_surface_faces[static_cast<std::size_t>(F)];
-      bool keep = true;
-      if (cluster_of[k] >= 0 && model.net_surface_clusters[static_cast<std::size_t>(cluster_of[k])].parts == 1)
-        // a patch on f alone: its triangle's three vertices ride on f
-        keep = !is_torn(f);
-      else
-        for (int m = 0; m < 3 && keep; ++m)
-          keep = !is_torn(model.net_surface_points[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])].face);
-      if (!keep) continue;
-      const Vec3& a = position(t[0]);
-      const Vec3& b = position(t[1]);
-      const Vec3& c = position(t[2]);
-      const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
-      if (!boxes_overlap(flo, fhi, qlo, qhi) || !finite(flo) || !finite(fhi)) continue;
-      ns.surface_candidates[static_cast<std::size_t>(nc)] = F;
-      ns.surface_lo[static_cast<std::size_t>(nc)] = flo;
-      ns.surface_hi[static_cast<std::size_t>(nc)] = fhi;
-      ns.surface_sphere_mask[static_cast<std::size_t>(nc)] = spheres;
-      slot = nc;
-      ++nc;
     }
   }
   return nc;

@@ -42,10 +42,14 @@ float float_above(double x) {
 /// for the riders on more than one net triangle, which lie in strips along f's edges), so that
 /// a patch holds about kClusterSize riders on f alone and more in a strip; a patch gets one record
 /// per net triangle its vertices ride on (the range of their first two weights there), the first
-/// holding the number of records and the largest offset of its vertices.
+/// holding the number of records, the number of its riders and the largest offset of its
+/// vertices. f's riders are then reordered so that each patch's are consecutive (patches in the
+/// order of their first rider, a patch's riders in their order before), which lets the contact
+/// search step over a patch no sphere reaches at once.
 void build_surface_clusters(Model& model) {
   const std::vector<std::int32_t>& begin = model.net_face_surface_begin;
-  const std::vector<std::int32_t>& list = model.net_face_surface_faces;
+  std::vector<std::int32_t>& list = model.net_face_surface_faces;
+  std::vector<std::int32_t> reordered, heads;  // f's riders in patch order; its patches' first records
   std::vector<std::int32_t> cluster(list.size(), -1);
   std::vector<NetSurfaceCluster> clusters;
   using Key = std::array<int, 4>;  // the riders' net triangles (ascending, −1 padded), the cell
@@ -87,8 +91,10 @@ void build_surface_clusters(Model& model) {
       }
       groups[it->second].push_back(k);
     }
+    heads.clear();
     for (std::size_t g = 0; g < groups.size(); ++g) {
       const auto head = static_cast<std::int32_t>(clusters.size());
+      heads.push_back(head);
       const Key& key = keys[g];
       for (int part = 0; part < 3 && key[static_cast<std::size_t>(part)] >= 0; ++part) {
         NetSurfaceCluster rec;
@@ -114,8 +120,19 @@ void build_surface_clusters(Model& model) {
         for (const int p : model.net_surface_faces[static_cast<std::size_t>(list[k])])
           offset = std::max(offset, model.net_surface_points[static_cast<std::size_t>(p)].offset.norm());
       clusters[static_cast<std::size_t>(head)].offset_max = float_above(offset);
-      for (const std::size_t k : groups[g]) cluster[k] = head;
+      clusters[static_cast<std::size_t>(head)].riders = static_cast<int>(groups[g].size());
     }
+    // The patches' riders made consecutive.
+    reordered.clear();
+    std::size_t k = first;
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+      const std::int32_t head = heads[g];
+      for (const std::size_t e : groups[g]) {
+        reordered.push_back(list[e]);
+        cluster[k++] = head;
+      }
+    }
+    std::copy(reordered.begin(), reordered.end(), list.begin() + static_cast<std::ptrdiff_t>(first));
   }
   model.net_face_surface_cluster = std::move(cluster);
   model.net_surface_clusters = std::move(clusters);

@@ -191,11 +191,9 @@ struct NetScratch {
   /// (1: torn), once a call whatever the number of fine vertices riding on it.
   std::vector<std::uint32_t> surface_net_stamp;
   std::vector<std::uint8_t> surface_net_torn;
-  /// Per fine-surface patch (Model::net_surface_clusters, at its first record): the stamp of the call that judged
-  /// it, and the near spheres (bits as surface_sphere_mask's) its bounds come within the radius
-  /// of then; 0: the call skips its triangles.
-  std::vector<std::uint32_t> surface_cluster_stamp;
-  std::vector<std::uint64_t> surface_cluster_close;
+  /// The fine-surface patches (Model::net_surface_clusters) the last call skipped, no near sphere
+  /// reaching them (a count for tests and profiles).
+  int surface_patches_skipped = 0;
   std::uint32_t surface_stamp = 0;  ///< The current call's stamp (0: never; wraps by clearing).
   // Resting nodes (net_rest.hpp): per node, its consecutive quiet steps (saturating at
   // detail::kRestSteps) and its state bits (resting, eligible, boundary; net_rest.cpp).

@@ -273,9 +273,10 @@ struct Model {
   /// Per entry of net_face_surface_faces: the patch its fine triangle belongs to there (the
   /// index of the patch's first record in net_surface_clusters; NetSurfaceCluster). Each net
   /// triangle's riders are split into patches of about half a dozen by the net triangles their
-  /// vertices ride on and their barycentric cells (net_surface_map.cpp); the search keeps
-  /// net_face_surface_faces' order. −1: in no patch (the search gathers it whenever its net
-  /// triangle is near; add_net_surface() puts every rider in one).
+  /// vertices ride on and their barycentric cells (net_surface_map.cpp), a patch's riders
+  /// consecutive (NetSurfaceCluster::riders); the search keeps net_face_surface_faces' order.
+  /// −1: in no patch (the search gathers it whenever its net triangle is near; add_net_surface()
+  /// puts every rider in one).
   std::vector<std::int32_t> net_face_surface_cluster;
   std::vector<NetSurfaceCluster> net_surface_clusters;
   /// Order in which the solver's SSOR sweeps visit the nodes (net_solve.hpp):

@@ -53,6 +53,9 @@ struct NetSurfaceCluster {
   std::array<float, 2> weights_hi{0.0F, 0.0F};
   /// On a patch's first record: its vertices' largest |offset| (m, rounded up to a float).
   float offset_max = 0.0F;
+  /// On a patch's first record: how many fine triangles it holds, consecutive in
+  /// Model::net_face_surface_faces from the first whose Model::net_face_surface_cluster names it.
+  int riders = 0;
 };
 
 /// Maps a fine surface onto net `net` of `model`: after add_net(), before or after
