@@ -27,8 +27,17 @@ namespace {
 /// θ²/2 under the first linearisation alone (its rotation is not linear); each further
 /// iteration squares the error.
 constexpr int kThreadNewtonIterations = 6;
-/// The iteration stops once no node moves by more than this fraction of l0 in an update.
+/// The iteration stops once no node's position is off by more than this fraction of l0: once an
+/// update moves no node by more, or, from the second update on, once the error the updates'
+/// contraction leaves after it does not exceed it (kThreadNewtonContraction).
 constexpr double kThreadNewtonTolerance = 1e-6;
+/// The error left after a Newton update Δ_k, estimated from its contraction Θ_k = ‖Δ_k‖ /
+/// ‖Δ_{k−1}‖ (largest node move, h |Δv|) as η_k ‖Δ_k‖, η_k = Θ_k / (1 − Θ_k): the error of an
+/// iteration that contracts at least at the rate Θ_k from there on (Hairer & Wanner, Solving
+/// Ordinary Differential Equations II, 2nd ed., §IV.8, the stopping criterion (8.10)–(8.13)).
+/// Newton's iteration contracts faster (quadratically) near the solution, so the estimate is on
+/// the safe side; it is used for Θ_k below this bound, where it is below ‖Δ_k‖ itself.
+constexpr double kThreadNewtonContraction = 0.5;
 
 /// A tie's point: block `block` of the band, where it is and how it moves at the step's start,
 /// and its translational effective mass when a dynamic body's (else it moves as given).
@@ -271,6 +280,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
   sc.tie_delta = {Vec3::Zero(), Vec3::Zero()};
   bool ok = true;
   bool swept = false;  // the self contact's candidates found (on the first iterate)
+  double last_move = 0.0;  // the last update's largest node move (m)
   for (int iteration = 0; iteration < kThreadNewtonIterations && ok; ++iteration) {
     for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
     band.clear();
@@ -303,7 +313,12 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
     if (p0.dynamic) sc.tie_delta[0] += band.rhs[0];
     if (p1.dynamic) sc.tie_delta[1] += band.rhs[n + 1];
     if (!(largest < 1e300)) ok = false;  // not finite
-    const bool converged = h * std::sqrt(largest) < kThreadNewtonTolerance * th.rest_segment;
+    const double move = h * std::sqrt(largest);  // the update's largest node move (m)
+    const double theta = iteration >= 1 ? move / last_move : 1.0;
+    last_move = move;
+    const double tolerance = kThreadNewtonTolerance * th.rest_segment;
+    const bool converged =
+        move < tolerance || (theta < kThreadNewtonContraction && theta / (1.0 - theta) * move < tolerance);
     if (iteration == 0 && th.self_contact && converged) {
       // The candidates the second iteration would sweep to this iterate, found now: with none,
       // the converged first iterate is the step, as without self contact.
