@@ -526,7 +526,7 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
       bool on_f_alone = false;  // a patch on f alone
       if (const std::int32_t pc = cluster_of[k]; pc >= 0) {
         const NetSurfaceCluster& patch = model.net_surface_clusters[static_cast<std::size_t>(pc)];
-        run_end = std::min(last, k + static_cast<std::size_t>(patch.riders));
+        run_end = std::min(last, k + static_cast<std::size_t>(std::max(patch.riders, 1)));  // ≥ 1: never stuck
         on_f_alone = patch.parts == 1;
         spheres = cluster_spheres(model, cs, near, nodes, pc, close, num_spheres);
         if (spheres == 0) {
