@@ -155,6 +155,8 @@ struct KnotPull {
   double late_min = 0.0, late_max = 0.0;  ///< The 50 ms mean pull's range over the last 0.5 s (N).
   double closest_strands = 0.0;  ///< Least distance of nodes ≥ 3 apart along it, at the end (m).
   int self_contacts = 0;         ///< At the end.
+  int unconverged_steps = 0;     ///< Steps whose Newton iteration ran out (ThreadOutput::converged).
+  bool ran_out_at_six = true;    ///< Each of them took all 6 iterations.
   bool broke = false, finite = true;
 };
 
@@ -213,6 +215,10 @@ KnotPull pull_knot(bool self_contact, double self_stiffness, double drag, double
     core::step(m, d);
     out.finite = out.finite && !(d.status & core::kNonFinite);
     out.broke = out.broke || s.broken_segment >= 0;
+    if (!s.output.converged) {
+      ++out.unconverged_steps;
+      out.ran_out_at_six = out.ran_out_at_six && s.output.iterations == 6;
+    }
     mean_pull += (s.output.tie_wrench_start.force.norm() - mean_pull) * m.dt / 0.05;
     if (out.pulled_at < 0.0 && mean_pull >= pull) {
       out.pulled_at = t;
@@ -280,12 +286,13 @@ TEST(ThreadKnot, AnOverhandKnotPulledTightHoldsTwoNewtons) {
   EXPECT_GT(r.self_contacts, 4);
   EXPECT_FALSE(r.broke);
   EXPECT_TRUE(r.finite);
+  EXPECT_TRUE(r.ran_out_at_six);
   std::printf(
       "knot: pulled to 2 N at %.3f s; held still 2 s: pull at least %.3f N, %.3f-%.3f N over the "
       "last 0.5 s; knot length %.2f mm; closest strands %.3f mm (diameter %.3f mm); %d self "
-      "contacts\n",
+      "contacts; Newton ran out in %d steps\n",
       r.pulled_at, r.held_force_min, r.late_min, r.late_max, r.knot_length * 1e3,
-      r.closest_strands * 1e3, 2e3 * core::ThreadModel{}.radius, r.self_contacts);
+      r.closest_strands * 1e3, 2e3 * core::ThreadModel{}.radius, r.self_contacts, r.unconverged_steps);
 }
 
 // Friction between the strands (ThreadModel::self_friction, μ = 0.3) holds back the strands
@@ -326,18 +333,19 @@ TEST(ThreadKnotFigures, TheKnotAcrossSelfContactStiffnessAndDrag) {
   const double drag[] = {1e-3, 3.0, 10.0, 100.0};
   std::printf(
       "| self contact (N/m) | drag (N s/m^2) | a trefoil, whole | pulled to 2 N at (s) | held "
-      "pull, last 0.5 s (N) |\n");
+      "pull, last 0.5 s (N) | Newton ran out (steps) |\n");
   for (const double k : stiffness)
     for (const double c : drag) {
       const KnotPull r = pull_knot(true, k, c, 2.0, 1.0);
       bool trefoil = !r.broke && r.finite;
       for (int v = 0; v < 3; ++v) trefoil = trefoil && r.determinant_at_end[v] == 3;
       if (r.pulled_at >= 0.0) {
-        std::printf("| %.0e | %g | %s | %.3f | %.3f-%.3f |\n", k, c, trefoil ? "yes" : "no",
-                    r.pulled_at, r.late_min, r.late_max);
+        std::printf("| %.0e | %g | %s | %.3f | %.3f-%.3f | %d |\n", k, c, trefoil ? "yes" : "no",
+                    r.pulled_at, r.late_min, r.late_max, r.unconverged_steps);
       } else {
-        std::printf("| %.0e | %g | %s | never | - |\n", k, c, trefoil ? "yes" : "no");
+        std::printf("| %.0e | %g | %s | never | - | %d |\n", k, c, trefoil ? "yes" : "no", r.unconverged_steps);
       }
+      EXPECT_TRUE(r.ran_out_at_six) << "k " << k << ", drag " << c << ": a step flagged before its 6 iterations";
       if (c >= 100.0) {
         EXPECT_TRUE(trefoil) << "k " << k << ", drag " << c;
       }

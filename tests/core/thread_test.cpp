@@ -3,13 +3,15 @@
 /// under end tension, a clamped cantilever against Euler–Bernoulli, the catenary, stability at
 /// three time steps, the tie to a light body, instrument contact without pass-through, an
 /// eyelet's friction, self contact (and a thread that never meets itself stepping as without
-/// it), the break, a non-finite step rolled back and counted, the stage plan, zero allocation.
+/// it), the break, a non-finite step rolled back and counted, a Newton iteration that ran out
+/// flagged, the stage plan, zero allocation.
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <numbers>
 
 #include "alloc_counter.hpp"
@@ -303,11 +305,15 @@ TEST(Thread, EyeletFrictionIsCoulombs) {
   EXPECT_GT(s.position.front().x(), -leg - R + 0.005);  // it slid through (10 mm pulled)
 }
 
-// A soft thread (bending negligible) tied at both ends and laid over itself, one strand along y
-// 1 mm above another along x, the upper strand pressed down by 10 µN a node through a viscous
-// medium: the strands touch and never pass (docs/thread.md: a crossing faster than ~r a step
-// is not yet held).
-TEST(Thread, SelfContactKeepsStrandsApart) {
+/// The strands rig: one thread laid along four corners so that its strands cross 1 mm apart
+/// (the upper along y at z = 1 mm, the lower along x at z = 0), both ends tied to the world,
+/// the upper strand's nodes 25–35 pressed down by `push` (N) each; `edit` changes the thread
+/// (its length, segments and start are the rig's) and the model.
+struct CrossingStrands {
+  core::Model model;
+  core::Data data;
+};
+CrossingStrands crossing_strands(double push, const std::function<void(core::ThreadModel&, core::Model&)>& edit) {
   const Vec3 corners[] = {Vec3(0.0, -0.03, 1e-3), Vec3(0.0, 0.02, 1e-3), Vec3(0.02, 0.02, 0.0),
                           Vec3(0.02, 0.0, 0.0), Vec3(-0.03, 0.0, 0.0)};
   double total = 0.0;
@@ -316,21 +322,36 @@ TEST(Thread, SelfContactKeepsStrandsApart) {
   t.length = total;
   t.segments = 140;
   t.start = corners[0];
-  t.young_modulus = 1e7;
-  t.damping = 1.0;  // a viscous medium: the strands meet at ~10 mm/s (10 µm a step)
-  const core::Model m = test::thread_model(t, [&](core::Model& mm) {  // both ends tied
+  CrossingStrands r;
+  r.model = test::thread_model(t, [&](core::Model& mm) {  // both ends tied
     mm.threads[0].tie_end.body = -1;
     mm.threads[0].tie_end.point = corners[4];
+    edit(mm.threads[0], mm);
   });
-  core::Data d = core::make_data(m);
-  core::ThreadState& s = d.threads[0];
+  r.data = core::make_data(r.model);
+  core::ThreadState& s = r.data.threads[0];
   for (std::size_t i = 0; i < s.position.size(); ++i) {  // the nodes along the corners
-    double l = static_cast<double>(i) * m.threads[0].rest_segment;
+    double l = static_cast<double>(i) * r.model.threads[0].rest_segment;
     int c = 0;
     for (; c < 3 && l > (corners[c + 1] - corners[c]).norm(); ++c) l -= (corners[c + 1] - corners[c]).norm();
     s.position[i] = corners[c] + l * (corners[c + 1] - corners[c]).normalized();
   }
-  for (std::size_t i = 25; i < 36; ++i) s.external_force[i] = Vec3(0.0, 0.0, -1e-5);
+  for (std::size_t i = 25; i < 36; ++i) s.external_force[i] = Vec3(0.0, 0.0, -push);
+  return r;
+}
+
+// A soft thread (bending negligible) tied at both ends and laid over itself, one strand along y
+// 1 mm above another along x, the upper strand pressed down by 10 µN a node through a viscous
+// medium: the strands touch and never pass (docs/thread.md: a crossing faster than ~r a step
+// is not yet held).
+TEST(Thread, SelfContactKeepsStrandsApart) {
+  CrossingStrands rig = crossing_strands(1e-5, [](core::ThreadModel& t, core::Model&) {
+    t.young_modulus = 1e7;
+    t.damping = 1.0;  // a viscous medium: the strands meet at ~10 mm/s (10 µm a step)
+  });
+  const core::Model& m = rig.model;
+  core::Data& d = rig.data;
+  const core::ThreadState& s = d.threads[0];
   int touching = 0;
   for (int i = 0; i < 300; ++i) {
     core::step(m, d);
@@ -429,6 +450,41 @@ TEST(Thread, ANonFiniteStepIsRolledBackAndCounted) {
   core::step(m, d);
   EXPECT_EQ(d.status & core::kNonFinite, 0u);
   EXPECT_EQ(d.nonfinite_steps, 1);
+}
+
+// Newton's iteration says whether it met its tolerance (ThreadOutput::converged): a thread
+// falling under gravity meets it every step; two strands of a slack thread at its default drag
+// pressed on each other (the rig of SelfContactKeepsStrandsApart without its viscous medium, the
+// knot's self contact of 1e5 N/m) run out of iterations on some steps (docs/thread.md, "A
+// knot": the drag alone regularises a light, slack thread's directions), and each step flagged
+// took all six.
+TEST(Thread, ANewtonIterationThatRunsOutIsFlagged) {
+  {
+    core::ThreadModel t;
+    t.segments = 50;
+    t.length = 0.05;
+    const core::Model m = test::thread_model(t, [](core::Model& mm) { mm.gravity = Vec3(0.0, 0.0, -9.81); });
+    core::Data d = core::make_data(m);
+    for (int i = 0; i < 300; ++i) {
+      core::step(m, d);
+      ASSERT_TRUE(d.threads[0].output.converged) << "step " << i;
+      ASSERT_LE(d.threads[0].output.iterations, 4) << "step " << i;
+    }
+  }
+  CrossingStrands rig =
+      crossing_strands(1e-4, [](core::ThreadModel&, core::Model& mm) { mm.material_pairs[0].stiffness = 1e5; });
+  int ran_out = 0;
+  for (int i = 0; i < 300; ++i) {
+    core::step(rig.model, rig.data);
+    const core::ThreadState& s = rig.data.threads[0];
+    ASSERT_EQ(rig.data.status & core::kNonFinite, 0u) << "step " << i;
+    if (s.output.converged) continue;
+    ++ran_out;
+    EXPECT_EQ(s.output.iterations, 6) << "step " << i;
+  }
+  std::printf("[thread] strands pressed at the default drag: %d of 300 steps ran out of Newton iterations\n",
+              ran_out);
+  EXPECT_GT(ran_out, 0);
 }
 
 // A thread dropped on a mesh obstacle and on a sphere set lies on them, not through them

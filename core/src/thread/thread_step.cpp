@@ -281,6 +281,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
   bool ok = true;
   bool swept = false;  // the self contact's candidates found (on the first iterate)
   double last_move = 0.0;  // the last update's largest node move (m)
+  bool met = false;        // the iteration met its tolerance
   for (int iteration = 0; iteration < kThreadNewtonIterations && ok; ++iteration) {
     for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
     band.clear();
@@ -325,10 +326,16 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
       for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
       find_thread_self_pairs(th, st, x, sc);
       swept = true;
-      if (sc.num_self_pairs == 0) break;
+      if (sc.num_self_pairs == 0) {
+        met = true;
+        break;
+      }
     }
     const bool self_checked = !th.self_contact || iteration >= 1;
-    if (self_checked && converged) break;
+    if (self_checked && converged) {
+      met = true;
+      break;
+    }
   }
   for (std::size_t i = 0; ok && i < n; ++i) {
     const Vec3 x1 = st.position[i] + h * v[i];
@@ -342,6 +349,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
     data.status |= kNonFinite;
     return;
   }
+  st.output.converged = met;
   hand_point_term_forces(data, st, sc, v, h);
   for (std::size_t i = 0; i < n; ++i) {
     st.velocity[i] = v[i];

@@ -53,6 +53,8 @@ constexpr RunSummarySegment kLayout[] = {
      "{thread.breaks}",
      set("thread.tension_max_n", "thread.breaks")},
     {" (the first at {thread.first_break_s} s)", set("thread.breaks")},
+    {", Newton unconverged steps {thread.newton_not_converged_steps}",
+     set("thread.newton_not_converged_steps")},
     {"; through tissue: {thread.eyelets_taken} puncture points taken over, {thread.eyelets_let_go} let "
      "go, {thread.eyelets_dropped} dropped",
      set("thread.eyelets_taken", "thread.eyelets_dropped")},

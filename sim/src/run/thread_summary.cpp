@@ -13,7 +13,9 @@
 namespace numen::sim {
 
 void accumulate_thread_figures(const core::Data& data, RunSummary& s) noexcept {
+  bool unconverged = false;
   for (const core::ThreadState& t : data.threads) {
+    unconverged = unconverged || !t.output.converged;
     s.thread_tension_max_n = std::max(s.thread_tension_max_n, t.output.max_tension);
     s.thread_stretch_max = std::max(s.thread_stretch_max, t.output.max_stretch);
     if (t.output.broke) {
@@ -21,6 +23,7 @@ void accumulate_thread_figures(const core::Data& data, RunSummary& s) noexcept {
       ++s.thread_breaks;
     }
   }
+  if (unconverged) ++s.thread_newton_not_converged_steps;
 }
 
 void summarize_threads(const core::Model& model, const core::Data& data, RunSummary& s) {

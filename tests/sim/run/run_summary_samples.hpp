@@ -90,6 +90,7 @@ inline sim::RunSummary full_managed_summary() {
   s.thread_tension_max_n = 1.5;
   s.thread_stretch_max = 0.004;
   s.thread_breaks = 1;
+  s.thread_newton_not_converged_steps = 3;
   s.thread_first_break_s = 3.25;
   s.thread_eyelets_taken = 2;
   s.thread_eyelets_let_go = 1;

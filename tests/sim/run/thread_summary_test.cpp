@@ -62,6 +62,33 @@ TEST(ThreadSummary, TheLargestTensionAndEachBreakAreKeptAndTheBreakIsAWarning) {
   EXPECT_NE(text.find("threads: tension max 1.500 N"), std::string::npos) << text;
 }
 
+// A step whose Newton iteration ran out (core::ThreadOutput::converged false) is counted once
+// whatever the number of threads that ran out in it; the text says so only when there was one.
+TEST(ThreadSummary, StepsWhoseNewtonIterationRanOutAreCounted) {
+  numen::core::Data d;
+  d.threads.resize(2);
+  numen::sim::RunSummary s;
+  s.threads = true;
+  EXPECT_EQ(numen::sim::format_summary(s).find("Newton unconverged"), std::string::npos);
+  {
+    numen::test::AllocationGuard guard;
+    numen::sim::accumulate_thread_figures(d, s);  // both converged
+    d.threads[0].output.converged = false;
+    d.threads[1].output.converged = false;
+    numen::sim::accumulate_thread_figures(d, s);  // both ran out: one step
+    d.threads[0].output.converged = true;
+    numen::sim::accumulate_thread_figures(d, s);  // the second ran out
+    d.threads[1].output.converged = true;
+    numen::sim::accumulate_thread_figures(d, s);
+    EXPECT_EQ(guard.count(), 0);
+  }
+  EXPECT_EQ(s.thread_newton_not_converged_steps, 2);
+  const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(s));
+  EXPECT_EQ(j["thread"]["newton_not_converged_steps"].get<std::int64_t>(), 2);
+  const std::string text = numen::sim::format_summary(s);
+  EXPECT_NE(text.find(", Newton unconverged steps 2"), std::string::npos) << text;
+}
+
 // A thread through tissue: the puncture points it took over, let go and dropped summed over the
 // threads; a dropped one (its eyelets all taken) is a warning naming the thread, and the text has
 // the through-tissue part only where a thread took one over.

@@ -162,6 +162,11 @@ struct ThreadOutput {
   Wrench tie_wrench_end;     ///< Same for the last node's tie.
   bool broke = false;        ///< The thread broke in this step (event).
   int iterations = 0;        ///< Newton iterations of the step (banded solves), 1 … 6.
+  /// Whether the step's Newton iteration met its tolerance (thread_step.cpp: no node off by more
+  /// than 1e-6 of a segment's length); false: it ran out of its 6 iterations and the step took
+  /// the last iterate (a contact chattering between iterates, a step too long for the thread's
+  /// turn). A non-finite step is rolled back and counted instead (Data::status kNonFinite).
+  bool converged = true;
   std::array<ThreadEyeletOutput, kMaxThreadEyelets> eyelets{};
 };
 

@@ -319,6 +319,9 @@ struct RunSummary {
   double thread_stretch_max = 0.0;       ///< Largest segment strain of any thread over the run.
   std::int64_t thread_breaks = 0;        ///< Threads that broke (a pull past break_strain).
   double thread_first_break_s = -1.0;    ///< Time of the first break (s; −1: none).
+  /// Steps in which a thread's Newton iteration ran out of its iterations and took the last
+  /// iterate (core::ThreadOutput::converged false for any thread).
+  std::int64_t thread_newton_not_converged_steps = 0;
   /// Puncture points the threads took over from their needles as eyelets on tissue (core::
   /// ThreadState::eyelets_taken, summed), those let go as a free end slid out, and those dropped
   /// for want of a free eyelet (each thread's a warning).
