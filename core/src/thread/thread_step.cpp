@@ -281,6 +281,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
   bool ok = true;
   bool swept = false;  // the self contact's candidates found (on the first iterate)
   double last_move = 0.0;  // the last update's largest node move (m)
+  const double tolerance = kThreadNewtonTolerance * th.rest_segment;  // m
   bool met = false;        // the iteration met its tolerance
   for (int iteration = 0; iteration < kThreadNewtonIterations && ok; ++iteration) {
     for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
@@ -317,7 +318,6 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
     const double move = h * std::sqrt(largest);  // the update's largest node move (m)
     const double theta = iteration >= 1 ? move / last_move : 1.0;
     last_move = move;
-    const double tolerance = kThreadNewtonTolerance * th.rest_segment;
     const bool converged =
         move < tolerance || (theta < kThreadNewtonContraction && theta / (1.0 - theta) * move < tolerance);
     if (iteration == 0 && th.self_contact && converged) {
