@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Writes sim/scenes/suturing.toml: one suture pass (docs/suturing.md, "The suturing scene") —
-a tissue pad with an entry and an exit mark, the 26 mm half-circle needle with its thread, two
+"""Writes sim/scenes/suturing.toml: two suture passes (docs/suturing.md, "The suturing scene") —
+a tissue pad with an entry and an exit mark for each, the 26 mm half-circle needle with its thread, two
 needle drivers (trocar instruments with dense jaws) on two devices, each with a scripted path.
 Deterministic, no input data: this script is the scene's whole provenance. Regenerate with
 
@@ -16,7 +16,9 @@ arc's centre with it): the tip presses on the pad at the entry mark until the fo
 needle reaches the puncture threshold, goes in, runs under the surface along the arc and comes out
 at the exit mark. The left driver then closes on the wire near the tip, the right opens and draws
 back, and the left rolls the needle on round its arc until the tail has passed out of the pad:
-the needle's puncture points are let go and the thread (tied to the tail) follows.
+the needle's puncture points are let go and the thread (tied to the tail) follows. The left then
+draws the needle back (pulling thread through for the next pass), hands it back to the right over
+the second pass's start, 6 mm along the wound, and the pass is made again there.
 
 A trocar fixes the shaft's direction from the hinge's place (only the roll about the shaft is
 free), so the needle cannot turn exactly about its arc's axis: each knot is the rigid turn of the
@@ -71,6 +73,11 @@ TURN_R = math.radians(165.0)   # the right driver's turn: the tip 25 deg past th
 GRIP_L = math.radians(8.0)     # the left driver's grip: 8 deg behind the tip
 TURN_L = math.radians(165.0)   # the left driver's turn: the tail past the exit, the needle out
 KNOT = math.radians(5.0)       # path knots every 5 deg of turn
+PASSES = 2                     # suture passes, each through its own entry and exit mark
+PASS_SPACING = 0.006           # m between the passes' arcs, along the wound (x)
+DRAW = 0.06                    # m: the left draws the needle back along its shaft after a pass but the
+                               # last, pulling through thread enough for the next (0.02: 38 N on it)
+LIFT = 0.010                   # m: the arc's centre above a pass's start at the hand-back between passes
 TURN_RATE = math.radians(60.0) # rad/s: the tip at 8.7 mm/s (JIGSAWS suturing's tool tips: up to 0.3 m/s)
 
 JAW_SPHERES = 10               # a jaw's spheres: 1 mm apart, so that they hold the 0.7 mm wire
@@ -172,8 +179,8 @@ Z_BODY = cross(E_U, E_Y)                              # the needle's +z: advanci
 TROCAR_ORIENTATION = qfrom_axes(E_Y, cross(N_AXIS, E_Y), N_AXIS)
 
 
-def on_circle(beta):
-    return add(CENTRE, mul(add(mul(E_Y, math.cos(beta)), mul(E_U, math.sin(beta))), R))
+def on_circle(beta, centre=CENTRE):
+    return add(centre, mul(add(mul(E_Y, math.cos(beta)), mul(E_U, math.sin(beta))), R))
 
 
 def tangent(beta):
@@ -190,7 +197,11 @@ def crossing(sign):
 
 
 BETA_ENTRY, BETA_EXIT = crossing(-1), crossing(+1)
-ENTRY_MARK, EXIT_MARK = (sub(on_circle(b), AIM) for b in (BETA_ENTRY, BETA_EXIT))
+# The passes' arc centres: the second PASS_SPACING along +x (towards the trocars), a running
+# suture's next stitch along the wound (the marks' line, y, crosses it).
+CENTRES = [add(CENTRE, (k * PASS_SPACING, 0.0, 0.0)) for k in range(PASSES)]
+ENTRY_MARKS = [sub(on_circle(BETA_ENTRY, c), AIM) for c in CENTRES]
+EXIT_MARKS = [sub(on_circle(BETA_EXIT, c), AIM) for c in CENTRES]
 
 # The needle's pose at the start: body x towards the arc's middle (β_tip + 90 deg), z = Z_BODY.
 NEEDLE_X = unit(add(mul(E_Y, math.cos(TIP_START + math.pi / 2)), mul(E_U, math.sin(TIP_START + math.pi / 2))))
@@ -199,10 +210,10 @@ NEEDLE_CENTRE_LOCAL = (-2 * R / math.pi, 0.0, 0.0)    # the circle's centre in t
 NEEDLE_P0 = sub(CENTRE, qrot(NEEDLE_Q0, NEEDLE_CENTRE_LOCAL))
 
 
-def jaw_frame(grip_beta):
+def jaw_frame(grip_beta, centre=CENTRE):
     """The jaws' wanted frame holding the wire at β: z along the shafts (N_AXIS), x along the wire,
     the hinge JAW_GRIP behind the wire along z."""
-    g = on_circle(grip_beta)
+    g = on_circle(grip_beta, centre)
     x = tangent(grip_beta)
     x = unit(sub(x, mul(N_AXIS, dot(x, N_AXIS))))
     q = qfrom_axes(x, cross(N_AXIS, x), N_AXIS)
@@ -214,27 +225,41 @@ def trocar_for(grip_beta):
     return sub(on_circle(grip_beta), mul(N_AXIS, SHAFT + JAW_GRIP))
 
 
-def turned_path(trocar, grip_beta, turn):
-    """The knots (hinge position, orientation) of a driver that holds the wire at β (at turn 0) and
-    turns the needle about its arc's axis by `turn` (the tip advancing), in KNOT steps: the rigid
-    turn mapped onto the trocar (its roll; the hinge moved so the arc's centre stays at CENTRE)."""
-    hinge0, q0 = jaw_frame(grip_beta)
-    centre_in_jaws = qrot(qconj(q0), sub(CENTRE, hinge0))
+def carried_path(trocar, grip_beta, poses, centre=CENTRE):
+    """The knots (hinge position, orientation) of a driver that holds the wire at β of the needle
+    whose arc is about `centre` (at turn 0), carrying the needle through `poses`: each (arc
+    centre, turn), the needle turned about its arc's axis by `turn` (the tip advancing) and moved
+    so that its arc is about that centre. Each knot is the rigid motion mapped onto the trocar (its
+    roll; the hinge moved so that the arc's centre the jaws carry is the pose's)."""
+    hinge0, q0 = jaw_frame(grip_beta, centre)
+    centre_in_jaws = qrot(qconj(q0), sub(centre, hinge0))
     knots = []
-    steps = max(1, int(round(turn / KNOT)))
-    for k in range(steps + 1):
-        turn_q = qaxis(Z_BODY, turn * k / steps)
+    for c, turn in poses:
+        turn_q = qaxis(Z_BODY, turn)
         wanted_q = qmul(turn_q, q0)
-        hinge = add(CENTRE, qrot(turn_q, sub(hinge0, CENTRE)))
-        for _ in range(20):  # move the hinge until the centre the jaws carry is CENTRE
+        hinge = add(c, qrot(turn_q, sub(hinge0, centre)))
+        for _ in range(20):  # move the hinge until the centre the jaws carry is c
             q = trocar_tool(trocar, hinge, wanted_q)
-            hinge = add(hinge, sub(CENTRE, add(hinge, qrot(q, centre_in_jaws))))
+            hinge = add(hinge, sub(c, add(hinge, qrot(q, centre_in_jaws))))
         knots.append((hinge, trocar_tool(trocar, hinge, wanted_q)))
     return knots
 
 
+def turned_path(trocar, grip_beta, turn, centre=CENTRE):
+    """The knots of a driver that holds the wire at β (at turn 0) and turns the needle about its
+    arc's axis (about `centre`) by `turn` (the tip advancing), in KNOT steps."""
+    steps = max(1, int(round(abs(turn) / KNOT)))
+    return carried_path(trocar, grip_beta, [(centre, turn * k / steps) for k in range(steps + 1)], centre)
+
+
 TROCAR_R = trocar_for(TIP_START + GRIP_R - TURN_R / 2)
 TROCAR_L = trocar_for(TIP_START - TURN_R + GRIP_L - TURN_L / 2)
+
+
+def qexp(v):
+    """The unit quaternion of rotation vector v."""
+    a = norm(v)
+    return qaxis(v, a) if a > 1e-15 else (1.0, 0.0, 0.0, 0.0)
 
 
 class Path:
@@ -258,42 +283,103 @@ class Path:
         if t > self.t + 1e-9:
             self.hold(t - self.t)
 
-    def follow(self, knots):
+    def follow(self, knots, duration=KNOT / TURN_RATE):
         for hinge, q in knots[1:]:
-            self.move(hinge, q, KNOT / TURN_RATE)
+            self.move(hinge, q, duration)
+
+    def travel(self, trocar, to, q, duration, jitter):
+        """To `to` with orientation `q` (its roll about the shaft) in knots of at most 0.1 s, each
+        the straight line's point with the orientation's share of the turn, as the trocar gives
+        it; every knot but the last moved by `jitter`."""
+        steps = max(1, int(math.ceil(duration / 0.1 - 1e-9)))
+        frm, q_from = self.at, self.q
+        turn = qlog(qmul(q, qconj(q_from)))
+        for k in range(1, steps + 1):
+            s = k / steps
+            hinge = add(frm, mul(sub(to, frm), s))
+            wanted = trocar_tool(trocar, hinge, qmul(qexp(mul(turn, s)), q_from))
+            self.move(hinge if k == steps else jitter(hinge), wanted, duration / steps)
 
 
 def vec(v):
     return "[" + ", ".join(f"{c:.6f}" for c in v) + "]"
 
 
+def hand_over(taker, giver, knot):
+    """`taker` comes in along its shaft to `knot` (hinge, orientation) over the wire and closes;
+    `giver` then opens and draws back 20 mm along its shaft; `taker` waits for it."""
+    hinge, q = knot
+    taker.move(add(hinge, mul(N_AXIS, -0.004)), q, 0.6)
+    taker.move(hinge, q, 0.4)
+    taker.hold(0.3, CLOSED)
+    giver.until(taker.t)
+    giver.hold(0.3, OPEN)
+    giver.move(add(giver.at, mul(N_AXIS, -0.02)), giver.q, 0.5)
+    taker.until(giver.t)
+
+
 def paths(rng=None):
-    """The two drivers' paths; with `rng`, every knot moved by up to ±2 mm in each coordinate."""
-    right_knots = turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R)
-    tip_after = TIP_START - TURN_R
-    left_knots = turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L)
+    """The two drivers' paths through PASSES passes; with `rng`, every knot moved by up to ±2 mm
+    in each coordinate (the first pass's knots drawn first, in the order of the one-pass scene)."""
     jitter = (lambda p: add(p, tuple(rng.uniform(-0.002, 0.002) for _ in range(3)))) if rng else (lambda p: p)
-    right_knots = [right_knots[0]] + [(jitter(h), q) for h, q in right_knots[1:]]
-    left_knots = [left_knots[0]] + [(jitter(h), q) for h, q in left_knots[1:]]
+
+    def jittered(knots):
+        return [knots[0]] + [(jitter(h), q) for h, q in knots[1:]]
+
+    tip_after = TIP_START - TURN_R
+    right_knots = jittered(turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R))
+    left_knots = jittered(turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L))
     # Right: closes on the needle where it lies, turns it through the pad, opens, draws back.
     right = Path(*right_knots[0])
     right.hold(0.2)
     right.hold(0.3, CLOSED)
-    right.follow(right_knots)
-    t_out = right.t
-    # Left: waits away from the pass, comes over the wire near the tip, closes, then turns.
-    lh, lq = left_knots[0]
-    left_wait = add(lh, mul(N_AXIS, -0.03))
-    left = Path(left_wait, lq)
-    left.until(t_out - 1.0)
-    left.move(add(lh, mul(N_AXIS, -0.004)), lq, 0.6)
-    left.move(lh, lq, 0.4)
-    left.hold(0.3, CLOSED)
-    right.until(left.t)
-    right.hold(0.3, OPEN)
-    right.move(add(right.at, mul(N_AXIS, -0.02)), right.q, 0.5)
-    left.until(right.t)
-    left.follow(left_knots)
+    for k, centre in enumerate(CENTRES):
+        if k > 0:
+            right_knots = jittered(turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R, centre))
+            left_knots = jittered(turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L, centre))
+            # The hand-back, over the next pass's start with its arc's centre LIFT up (the arc
+            # clear of the pad) and the needle half a turn from its start (the tip towards the
+            # exit's side): there the left's grip near the tip and the right's near the tail keep
+            # the shafts apart (held as at the start, they would cross). The left draws the needle
+            # back DRAW along its shaft (the thread pulled through), carries it there turning it on
+            # (the tail over the top) and holds; the right comes over the wire near the tail as the
+            # left did near the tip and closes; the left opens and draws back; the right turns the
+            # needle half a turn back (the tail over the top again, so that the thread it trails
+            # unwinds rather than wraps round the arc) and puts it down at the start.
+            previous = CENTRES[k - 1]
+            back = add(previous, mul(N_AXIS, -DRAW))
+            lifted = add(centre, (0.0, 0.0, LIFT))
+            handback = math.pi - TURN_R      # the left's turn of the hand-back pose (tip at TIP_START + pi)
+            while handback < TURN_L:
+                handback += 2 * math.pi
+            steps = max(1, int(round(abs(handback - TURN_L) / KNOT)))
+            poses = [(previous, TURN_L), (back, TURN_L)]
+            poses += [(add(back, mul(sub(lifted, back), i / steps)), TURN_L + (handback - TURN_L) * i / steps)
+                      for i in range(1, steps + 1)]
+            carry = jittered(carried_path(TROCAR_L, tip_after + GRIP_L, poses, previous))
+            left.follow(carry[:2], 0.5)
+            left.follow(carry[1:], KNOT / TURN_RATE)
+            over = jittered(carried_path(TROCAR_R, TIP_START + GRIP_R,
+                                         [(lifted, math.pi - math.pi * i / 36) for i in range(37)] +
+                                         [(add(lifted, mul(sub(centre, lifted), i / 5)), 0.0) for i in range(1, 6)],
+                                         centre))
+            rh, rq = over[0]
+            right.until(left.t)
+            right.travel(TROCAR_R, add(rh, mul(N_AXIS, -0.03)), rq, 1.5, jitter)
+            hand_over(right, left, over[0])
+            right.follow(over[:37])
+            right.follow(over[36:], 0.1)
+        right.follow(right_knots)
+        t_out = right.t
+        # Left: waits away from the pass, comes over the wire near the tip, closes, then turns.
+        lh, lq = left_knots[0]
+        if k == 0:
+            left = Path(add(lh, mul(N_AXIS, -0.03)), lq)
+        else:
+            left.travel(TROCAR_L, add(lh, mul(N_AXIS, -0.03)), lq, 1.0, jitter)
+        left.until(t_out - 1.0)
+        hand_over(left, right, left_knots[0])
+        left.follow(left_knots)
     left.move(add(left.at, mul(N_AXIS, -0.02)), left.q, 0.5)
     right.until(left.t + 0.5)
     left.until(left.t + 0.5)
@@ -320,8 +406,8 @@ start = {{ position = {vec(start)}, orientation = {vec(q)}, jaw = {OPEN:.6f} }}
     return out
 
 
-HEADER = """# numen suturing: one suture pass (docs/suturing.md, "The suturing scene") — a tissue pad with
-# an entry and an exit mark, the 26 mm half-circle needle (puncture threshold 1 N) with a 3-0 silk
+HEADER = """# numen suturing: two suture passes (docs/suturing.md, "The suturing scene") — a tissue pad with
+# an entry and an exit mark for each, the 26 mm half-circle needle (puncture threshold 1 N) with a 3-0 silk
 # thread tied to its tail, two needle drivers (trocar instruments whose jaws have ten 1.5 mm
 # spheres 1 mm apart, so that they hold a 0.7 mm wire) on two devices. Written by
 # sim/data/make_suturing.py (its whole provenance; edit that and regenerate, not this file).
@@ -329,7 +415,8 @@ HEADER = """# numen suturing: one suture pass (docs/suturing.md, "The suturing s
 # The right driver holds the needle near its tail and rolls it about the arc's own axis: the tip
 # punctures the pad at the entry mark, runs under the surface and comes out at the exit mark; the
 # left driver takes the wire near the tip, the right lets go and draws back, the left rolls the
-# needle on until its tail has left the pad. The summary's needle figures (docs/outputs.md,
+# needle on until its tail has left the pad. The left then hands the needle back to the right over
+# the second pass's marks, 6 mm along the wound, and the pass is made again there. The summary's needle figures (docs/outputs.md,
 # `needle.*`): punctures, exits, tunnels, the tip force at the puncture against its threshold,
 # the deviation from the arc, the entry and exit errors from the marks.
 """
@@ -339,7 +426,7 @@ def scene(rng=None):
     right, left = paths(rng)
     duration = max(right.t, left.t)
     out = [HEADER, f"""name = "suturing"
-description = "One suture pass through a tissue pad: the needle driven along its arc from an entry mark to an exit mark by one trocar needle driver, handed to the other, pulled through with its thread"
+description = "Two suture passes through a tissue pad: the needle driven along its arc from an entry mark to an exit mark by one trocar needle driver, handed to the other, pulled through with its thread, handed back and driven through the next pair of marks"
 dt = 0.001
 gravity = [0.0, 0.0, 0.0]   # the needle is held from the first period: no weight to carry
 integrator = "implicit-euler"
@@ -396,8 +483,8 @@ mass = {NEEDLE_MASS}   # kg: simulated (the wire's is 78 mg; docs/suturing.md, "
 position = {vec(NEEDLE_P0)}
 orientation = {vec(NEEDLE_Q0)}
 puncture_force = {PUNCTURE_FORCE}
-entry_mark = {vec(ENTRY_MARK)}
-exit_mark = {vec(EXIT_MARK)}
+entry_mark = [{", ".join(vec(m) for m in ENTRY_MARKS)}]   # one per pass
+exit_mark = [{", ".join(vec(m) for m in EXIT_MARKS)}]
 
 [[thread]]
 name = "suture"

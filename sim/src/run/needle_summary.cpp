@@ -57,8 +57,8 @@ void begin_needle_figures(const Scene& scene, RunSummary& s) {
     r.puncture_force_n = m.needles[k].puncture_force > 0.0 ? m.needles[k].puncture_force : 0.0;
     if (k < scene.needle_marks.size()) {
       const NeedleMarks& marks = scene.needle_marks[k];
-      if (marks.entry) r.has_entry_mark = true, r.entry_mark = {marks.entry->x(), marks.entry->y(), marks.entry->z()};
-      if (marks.exit) r.has_exit_mark = true, r.exit_mark = {marks.exit->x(), marks.exit->y(), marks.exit->z()};
+      for (const core::Vec3& p : marks.entry) r.entry_marks.push_back({p.x(), p.y(), p.z()});
+      for (const core::Vec3& p : marks.exit) r.exit_marks.push_back({p.x(), p.y(), p.z()});
     }
   }
 }
@@ -91,10 +91,24 @@ void accumulate_needle_figures(const core::Model& model, const core::Data& data,
   for (std::size_t k = 0; k < count; ++k) {
     const core::NeedleState& n = data.needles[k];
     NeedleRunFigures& r = s.needle_runs[k];
-    if (n.punctures_made > r.punctures && r.entry_s < 0.0)
-      if (const core::NeedlePuncture* p = newest(n, false)) r.entry = rest_point(model, *p), r.entry_s = data.time;
-    if (n.exits > r.exits && r.exit_s < 0.0)
-      if (const core::NeedlePuncture* p = newest(n, true)) r.exit = rest_point(model, *p), r.exit_s = data.time;
+    // An entry opens a pass (replacing one still open: an attempt drawn back out); an exit ends
+    // the open pass. An entry whose points were all let go without an exit leaves its pass open
+    // until the next entry replaces it.
+    if (n.punctures_made > r.punctures)
+      if (const core::NeedlePuncture* p = newest(n, false)) {
+        const bool open = r.num_passes > 0 && r.passes[r.num_passes - 1].exit_s < 0.0;
+        if (!open && r.num_passes == r.passes.size()) {
+          ++r.passes_lost;
+        } else {
+          if (!open) ++r.num_passes;
+          r.passes[r.num_passes - 1] = NeedlePassFigures{rest_point(model, *p), {}, data.time, -1.0};
+        }
+      }
+    if (n.exits > r.exits && r.num_passes > 0 && r.passes[r.num_passes - 1].exit_s < 0.0)
+      if (const core::NeedlePuncture* p = newest(n, true)) {
+        NeedlePassFigures& pass = r.passes[r.num_passes - 1];
+        pass.exit = rest_point(model, *p), pass.exit_s = data.time;
+      }
     if (n.tunnels > r.tunnels && r.first_tunnel_s < 0.0) r.first_tunnel_s = data.time;
     r.punctures = n.punctures_made;
     r.exits = n.exits;
@@ -112,16 +126,20 @@ void summarize_needles(RunSummary& s) {
     s.needle_exits += r.exits;
     s.needle_releases += r.releases;
     s.needle_tunnels += r.tunnels;
-    if (r.exit_s >= 0.0 && r.entry_s >= 0.0 && r.exit_s >= r.entry_s) ++s.needle_passes;
+    std::size_t through = 0;
+    for (std::size_t i = 0; i < r.num_passes; ++i) through += r.passes[i].exit_s >= 0.0 ? 1 : 0;
+    s.needle_passes += static_cast<std::int64_t>(through);
     if (s.needle_puncture_force_n == 0.0) s.needle_puncture_force_n = r.puncture_force_n;  // until a puncture
-    if (r.punctures > 0 && r.entry_s >= last_puncture_s) {
-      // The run's last puncture: the needle whose first entry came last (one entry each in a pass).
-      last_puncture_s = r.entry_s;
+    const double first_entry_s = r.num_passes > 0 ? r.passes[0].entry_s : -1.0;
+    if (r.punctures > 0 && first_entry_s >= last_puncture_s) {
+      // The run's last puncture: the needle whose first entry came last.
+      last_puncture_s = first_entry_s;
       s.needle_puncture_tip_force_n = r.puncture_tip_force_n;
       s.needle_puncture_force_n = r.puncture_force_n;
     }
     s.needle_deviation_max_mm = std::max(s.needle_deviation_max_mm, r.deviation_max_mm);
-    if (r.has_entry_mark || r.has_exit_mark) {
+    const std::size_t marked = std::max(r.entry_marks.size(), r.exit_marks.size());
+    if (marked > 0) {
       if (!s.needle_marks) s.needle_entry_error_mm = s.needle_exit_error_mm = 0.0;
       s.needle_marks = true;
     }
@@ -131,29 +149,56 @@ void summarize_needles(RunSummary& s) {
        << plural(r.exits, "exit", "exits") << ", " << r.releases << " "
        << plural(r.releases, "release", "releases") << ", " << r.tunnels << " "
        << plural(r.tunnels, "tunnel", "tunnels") << "; ";
-    if (r.exit_s >= 0.0 && r.entry_s >= 0.0)
-      os << "through (in at " << r.entry_s << " s, out at " << r.exit_s << " s)";
-    else if (r.entry_s >= 0.0)
-      os << "in at " << r.entry_s << " s, not out";
-    else
-      os << "never in";
+    // One pass (and at most one mark each): "through (in at …, out at …)"; more: each pass by its
+    // number, with its marks.
+    const bool several = r.num_passes > 1 || marked > 1;
+    const auto pass_text = [&os](const NeedlePassFigures& p) {
+      if (p.exit_s >= 0.0)
+        os << "through (in at " << p.entry_s << " s, out at " << p.exit_s << " s)";
+      else
+        os << "in at " << p.entry_s << " s, not out";
+    };
+    if (!several) {
+      if (r.num_passes > 0)
+        pass_text(r.passes[0]);
+      else
+        os << "never in";
+    } else {
+      os << through << " of " << std::max(r.num_passes, marked) << " passes through";
+    }
+    if (r.passes_lost > 0) os << " (" << r.passes_lost << " more entries not recorded)";
     if (r.punctures > 0)
       os << "; tip force at the last puncture " << r.puncture_tip_force_n << " N (threshold "
          << r.puncture_force_n << " N); deviation from the arc max " << r.deviation_max_mm << " mm";
     const auto mark = [&os](const char* what, bool has, double at_s, const std::array<double, 3>& p,
-                                const std::array<double, 3>& m, double& largest) {
+                            const std::array<double, 3>& m, double& largest) {
       if (!has) return;
       if (at_s < 0.0) {
-        os << "; " << what << " mark missed (none)";
+        os << what << " mark missed (none)";
         largest = -1.0;
         return;
       }
       const double e = distance_mm(p, m);
-      os << "; " << what << " " << e << " mm from its mark";
+      os << what << " " << e << " mm from its mark";
       if (largest >= 0.0) largest = std::max(largest, e);
     };
-    mark("entry", r.has_entry_mark, r.entry_s, r.entry, r.entry_mark, s.needle_entry_error_mm);
-    mark("exit", r.has_exit_mark, r.exit_s, r.exit, r.exit_mark, s.needle_exit_error_mm);
+    const NeedlePassFigures none{};
+    for (std::size_t i = 0; i < std::max(r.num_passes, marked); ++i) {
+      const NeedlePassFigures& p = i < r.num_passes ? r.passes[i] : none;
+      if (several) {
+        os << "; pass " << i + 1 << ": ";
+        if (p.entry_s < 0.0)
+          os << "never in";
+        else
+          pass_text(p);
+      }
+      const bool has_entry = i < r.entry_marks.size(), has_exit = i < r.exit_marks.size();
+      const char* separator = several ? ", " : "; ";
+      if (has_entry) os << separator;
+      mark("entry", has_entry, p.entry_s, p.entry, has_entry ? r.entry_marks[i] : none.entry, s.needle_entry_error_mm);
+      if (has_exit) os << separator;
+      mark("exit", has_exit, p.exit_s, p.exit, has_exit ? r.exit_marks[i] : none.exit, s.needle_exit_error_mm);
+    }
     s.needle_lines.push_back(os.str());
     if (r.tunnels > 0) {
       std::ostringstream w;

@@ -279,7 +279,7 @@ constexpr RunFigure kFigures[] = {
     {"needle.tunnels", "",
      "Steps a needle's tip went into tissue without a puncture (must be 0; each needle's a warning, exit status 7)",
      K::kCount, [](const S& s) noexcept { return count(s.needle_tunnels); }, needled},
-    {"needle.passes", "", "Needles whose pass went through: an entry, then an exit", K::kCount,
+    {"needle.passes", "", "Passes that went through (an entry, then an exit), all needles", K::kCount,
      [](const S& s) noexcept { return count(s.needle_passes); }, needled},
     {"needle.puncture_tip_force_n", "N", "The tip's force along its needle at the run's last puncture",
      K::kReal, [](const S& s) noexcept { return real(s.needle_puncture_tip_force_n); }, needled},
@@ -296,10 +296,10 @@ constexpr RunFigure kFigures[] = {
     {"needle.marks", "", "A needle has an entry_mark or an exit_mark (the scene's; docs/suturing.md)", K::kFlag,
      [](const S& s) noexcept { return flag(s.needle_marks); }, needled},
     {"needle.entry_error_mm", "mm",
-     "Marked needles (entry_mark): largest distance of the first entry's material point at rest from its mark "
-     "(−1: one never went in)",
+     "Marked passes (entry_mark, one per pass): largest distance of a pass's entry material point at rest from "
+     "its mark (−1: a marked pass never went in)",
      K::kReal, [](const S& s) noexcept { return real(s.needle_entry_error_mm); }, marked},
-    {"needle.exit_error_mm", "mm", "... of the first exit from its exit_mark (−1: one never came out)", K::kReal,
+    {"needle.exit_error_mm", "mm", "... of a pass's exit from its exit_mark (−1: a marked pass never came out)", K::kReal,
      [](const S& s) noexcept { return real(s.needle_exit_error_mm); }, marked},
     {"needle.lines", "", "Each needle: its counts, whether it went through and when, the tip force at its "
      "last puncture, its largest deviation, its errors from its marks", K::kTextList,

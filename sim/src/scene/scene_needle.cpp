@@ -11,6 +11,7 @@
 #include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/needle.hpp"
+#include "numen/sim/run/run_summary.hpp"
 #include "scene_deformable.hpp"
 
 namespace numen::sim {
@@ -82,10 +83,13 @@ void parse_needles(const TomlTable& root, Scene& scene) {
     spec.tie_damping = t.number_in("tie_damping", 0.0, kInf, spec.tie_damping);
     spec.friction = t.number_in("friction", 0.0, kInf, spec.friction);
     NeedleMarks marks;
-    if (t.has("entry_mark")) marks.entry = t.vec3_or("entry_mark", core::Vec3::Zero());
-    if (t.has("exit_mark")) marks.exit = t.vec3_or("exit_mark", core::Vec3::Zero());
-    if ((marks.entry || marks.exit) && !(spec.puncture_force > 0.0))
-      t.fail(marks.entry ? "entry_mark" : "exit_mark",
+    if (t.has("entry_mark")) marks.entry = t.points("entry_mark");
+    if (t.has("exit_mark")) marks.exit = t.points("exit_mark");
+    if (marks.entry.size() > kMaxNeedlePasses || marks.exit.size() > kMaxNeedlePasses)
+      t.fail(marks.entry.size() > kMaxNeedlePasses ? "entry_mark" : "exit_mark",
+             "at most " + std::to_string(kMaxNeedlePasses) + " marks (one per pass) a needle");
+    if ((!marks.entry.empty() || !marks.exit.empty()) && !(spec.puncture_force > 0.0))
+      t.fail(!marks.entry.empty() ? "entry_mark" : "exit_mark",
              "a needle without a puncture_force never goes into tissue: give it one, or leave out its marks");
     core::add_needle(m, spec);
     scene.needle_marks.resize(m.needles.size());

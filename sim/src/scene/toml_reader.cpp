@@ -160,6 +160,30 @@ core::Vec3 TomlTable::vec3_or(std::string_view key, const core::Vec3& fallback) 
   return has(key) ? vec3(key) : fallback;
 }
 
+std::vector<core::Vec3> TomlTable::points(std::string_view key) const {
+  const toml::node* node = table_->get(key);
+  const toml::array* arr = node ? node->as_array() : nullptr;
+  if (!arr || arr->empty() || !arr->get(0)->is_array()) return {vec3(key)};  // one point
+  std::vector<core::Vec3> out;
+  out.reserve(arr->size());
+  for (std::size_t i = 0; i < arr->size(); ++i) {
+    const std::string k = key_path(key) + "[" + std::to_string(i) + "]";
+    const toml::array* p = arr->get(i)->as_array();
+    if (!p) fail_at(arr->get(i), k, std::string("expected a point [x, y, z], found ") + type_name(*arr->get(i)));
+    if (p->size() != 3) fail_at(arr->get(i), k, "expected 3 numbers, found " + std::to_string(p->size()));
+    core::Vec3 v;
+    for (std::size_t j = 0; j < 3; ++j) {
+      const auto x = as_number(*p->get(j));
+      const std::string kj = k + "[" + std::to_string(j) + "]";
+      if (!x) fail_at(p->get(j), kj, std::string("expected a number, found ") + type_name(*p->get(j)));
+      if (!std::isfinite(*x)) fail_at(p->get(j), kj, "must be finite");
+      v[static_cast<Eigen::Index>(j)] = *x;
+    }
+    out.push_back(v);
+  }
+  return out;
+}
+
 core::Quat TomlTable::quaternion_or(std::string_view key, const core::Quat& fallback) const {
   if (!has(key)) return fallback;
   auto v = numbers(key, 4);

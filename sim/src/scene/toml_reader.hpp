@@ -47,6 +47,9 @@ class TomlTable {
   /// [x, y, z], finite.
   core::Vec3 vec3(std::string_view key) const;
   core::Vec3 vec3_or(std::string_view key, const core::Vec3& fallback) const;
+  /// One point [x, y, z] or a list of them [[x, y, z], ...] (at least one), each finite; the
+  /// error names the element (`key[i]`, `key[i][j]`).
+  std::vector<core::Vec3> points(std::string_view key) const;
   /// [w, x, y, z], non-zero, returned normalised.
   core::Quat quaternion_or(std::string_view key, const core::Quat& fallback) const;
   /// A list of numbers of length n (n < 0: any length).

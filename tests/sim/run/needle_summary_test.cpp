@@ -42,8 +42,8 @@ numen::sim::Scene pad_scene() {
   m.needles[0].name = "sh";
   m.needles[0].puncture_force = 1.0;
   scene.needle_marks.resize(1);
-  scene.needle_marks[0].entry = Vec3(0.0, 0.001, 0.01);   // entry at rest: (0, 0, 10) mm
-  scene.needle_marks[0].exit = Vec3(0.01, 0.002, 0.01);   // exit at rest: (10, 0, 10) mm
+  scene.needle_marks[0].entry = {Vec3(0.0, 0.001, 0.01)};   // entry at rest: (0, 0, 10) mm
+  scene.needle_marks[0].exit = {Vec3(0.01, 0.002, 0.01)};   // exit at rest: (10, 0, 10) mm
   return scene;
 }
 
@@ -127,6 +127,72 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
                       "needle sh: "),
             std::string::npos)
       << text;
+}
+
+// Two passes, each against its own marks (`entry_mark`, `exit_mark` lists): an attempt drawn back
+// out before its exit is replaced by the next entry; the second pass's errors are its own marks';
+// a marked pass that never came out makes the exit error −1 ("missed"). No allocation.
+TEST(NeedleSummary, EachPassIsMeasuredAgainstItsOwnMarks) {
+  numen::sim::Scene scene = pad_scene();
+  scene.needle_marks[0].entry.push_back(Vec3(0.0, 0.0105, 0.01));    // pass 2's entry: node 2, 0.5 mm off
+  scene.needle_marks[0].exit.push_back(Vec3(0.01, 0.0, 0.0115));     // its exit: node 1, 1.5 mm off
+  scene.needle_marks[0].exit.push_back(Vec3(0.0, 0.0, 0.01));        // a third pass, never made
+  const numen::core::Model& m = scene.model;
+  numen::core::Data d;
+  d.needles.resize(1);
+  numen::sim::RunSummary s;
+  numen::sim::begin_needle_figures(scene, s);
+  numen::core::NeedleState& n = d.needles[0];
+  const auto point = [](bool exit, int node) {
+    numen::core::NeedlePuncture p;
+    p.net = 0, p.face = 0, p.exit = exit;
+    p.weights = Vec3::Zero();
+    p.weights[node] = 1.0;
+    return p;
+  };
+  const auto entry = [&](double t, int node) {
+    d.time = t, ++n.punctures_made, n.num_punctures = 1, n.punctures[0] = point(false, node);
+    numen::sim::accumulate_needle_figures(m, d, s);
+  };
+  const auto exit = [&](double t, int node) {
+    d.time = t, ++n.exits, n.num_punctures = 2, n.punctures[1] = point(true, node);
+    numen::sim::accumulate_needle_figures(m, d, s);
+  };
+  {
+    numen::test::AllocationGuard guard;
+    entry(0.5, 1);   // an attempt at node 1, drawn back out
+    d.time = 0.6, n.num_punctures = 0, ++n.releases;
+    numen::sim::accumulate_needle_figures(m, d, s);
+    entry(0.7, 0);   // pass 1: in at node 0, out at node 1
+    exit(0.9, 1);
+    d.time = 1.0, n.num_punctures = 0, n.releases += 2;
+    numen::sim::accumulate_needle_figures(m, d, s);
+    entry(2.0, 2);   // pass 2: in at node 2, out at node 1
+    exit(2.5, 1);
+    EXPECT_EQ(guard.count(), 0);
+  }
+  const numen::sim::NeedleRunFigures& r = s.needle_runs[0];
+  ASSERT_EQ(r.num_passes, 2u);
+  EXPECT_DOUBLE_EQ(r.passes[0].entry_s, 0.7);
+  EXPECT_DOUBLE_EQ(r.passes[1].exit_s, 2.5);
+  numen::sim::summarize_needles(s);
+  EXPECT_EQ(s.needle_punctures, 3);
+  EXPECT_EQ(s.needle_passes, 2);
+  EXPECT_DOUBLE_EQ(s.needle_entry_error_mm, 1.0) << "pass 1's 1 mm, pass 2's 0.5 mm";
+  EXPECT_DOUBLE_EQ(s.needle_exit_error_mm, -1.0) << "the third pass's exit mark: missed";
+  ASSERT_EQ(s.needle_lines.size(), 1u);
+  EXPECT_EQ(s.needle_lines[0],
+            "sh: 3 punctures, 2 exits, 3 releases, 0 tunnels; 2 of 3 passes through; tip force at the last "
+            "puncture 0.000 N (threshold 1.000 N); deviation from the arc max 0.000 mm; pass 1: through (in "
+            "at 0.700 s, out at 0.900 s), entry 1.000 mm from its mark, exit 2.000 mm from its mark; pass 2: "
+            "through (in at 2.000 s, out at 2.500 s), entry 0.500 mm from its mark, exit 1.500 mm from its "
+            "mark; pass 3: never in, exit mark missed (none)");
+  numen::sim::RunSummary again;  // without the third mark: the largest of the two passes' errors
+  scene.needle_marks[0].exit.pop_back();
+  numen::sim::begin_needle_figures(scene, again);
+  again.needle_runs[0].passes = r.passes, again.needle_runs[0].num_passes = r.num_passes;
+  numen::sim::summarize_needles(again);
+  EXPECT_DOUBLE_EQ(again.needle_exit_error_mm, 2.0);
 }
 
 // The largest force on the tissue: |Σ F| of the held node springs after the penalty contacts and

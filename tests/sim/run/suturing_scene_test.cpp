@@ -66,35 +66,39 @@ std::string perturbed(const std::string& text, unsigned seed) {
 
 }  // namespace
 
-TEST(SuturingScene, ThePassGoesInAndOutAtTheMarksAtTheThresholdWithoutATunnel) {
+TEST(SuturingScene, BothPassesGoInAndOutAtTheirMarksAtTheThresholdWithoutATunnel) {
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_REQUIRE_DEFORMABLE();
   const numen::sim::RunSummary s = run_suturing(numen::test::shipped_scene_text("suturing.toml"));
-  print("scripted pass", s);
+  print("scripted passes", s);
   EXPECT_FALSE(s.nan_detected);
   EXPECT_EQ(s.exit_status, 0) << (s.exit_reasons.empty() ? "" : s.exit_reasons[0]);
   ASSERT_TRUE(s.needles);
-  EXPECT_EQ(s.needle_punctures, 1);
-  EXPECT_EQ(s.needle_exits, 1);
-  EXPECT_EQ(s.needle_passes, 1) << "in, then out";
+  EXPECT_EQ(s.needle_punctures, 2);
+  EXPECT_EQ(s.needle_exits, 2);
+  EXPECT_EQ(s.needle_passes, 2) << "each in, then out";
+  ASSERT_EQ(s.needle_runs.size(), 1u);
+  ASSERT_EQ(s.needle_runs[0].num_passes, 2u);
+  EXPECT_LT(s.needle_runs[0].passes[0].exit_s, s.needle_runs[0].passes[1].entry_s) << "one after the other";
   EXPECT_EQ(s.needle_tunnels, 0);
   ASSERT_TRUE(s.needle_marks);
   EXPECT_GE(s.needle_entry_error_mm, 0.0);
-  EXPECT_LT(s.needle_entry_error_mm, 1.0) << "mm from the entry mark";
+  EXPECT_LT(s.needle_entry_error_mm, 1.0) << "mm from the entry marks (the larger of the two passes')";
   EXPECT_GE(s.needle_exit_error_mm, 0.0);
-  EXPECT_LT(s.needle_exit_error_mm, 1.0) << "mm from the exit mark";
+  EXPECT_LT(s.needle_exit_error_mm, 1.0) << "mm from the exit marks";
   EXPECT_GE(s.needle_puncture_tip_force_n, kThreshold);
   EXPECT_LT(s.needle_puncture_tip_force_n, 1.1 * kThreshold) << "N: within 10 % of the threshold";
   EXPECT_DOUBLE_EQ(s.needle_puncture_force_n, kThreshold);
   EXPECT_GT(s.thread_tension_max_n, 0.0);
   EXPECT_EQ(s.thread_breaks, 0);
+  EXPECT_EQ(s.thread_eyelets_taken, 4) << "the thread drawn through both passes' entries and exits";
 }
 
 TEST(SuturingFigures, TwentyPassesWithTheirPathsPerturbedByTwoMillimetres) {
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_REQUIRE_DEFORMABLE();
   const std::string text = numen::test::shipped_scene_text("suturing.toml");
-  int through = 0, at_marks = 0, diverged = 0;
+  int through = 0, first_through = 0, at_marks = 0, diverged = 0;
   constexpr unsigned kSeeds = 20;
   for (unsigned seed = 1; seed <= kSeeds; ++seed) {
     const numen::sim::RunSummary s = run_suturing(perturbed(text, seed));
@@ -108,22 +112,24 @@ TEST(SuturingFigures, TwentyPassesWithTheirPathsPerturbedByTwoMillimetres) {
       ++diverged;
       continue;
     }
-    through += s.needle_passes == 1 ? 1 : 0;
+    through += s.needle_passes == 2 ? 1 : 0;
+    first_through += s.needle_runs.at(0).num_passes > 0 && s.needle_runs[0].passes[0].exit_s >= 0.0 ? 1 : 0;
     at_marks += (s.needle_entry_error_mm >= 0.0 && s.needle_entry_error_mm < 1.0 && s.needle_exit_error_mm >= 0.0 &&
                  s.needle_exit_error_mm < 1.0)
                     ? 1
                     : 0;
   }
-  std::printf("perturbed by ±2 mm: %d of %u through, %d of %u within 1 mm of both marks, %d diverged\n",
-              through, kSeeds, at_marks, kSeeds, diverged);
-  // The issue asks 10 of 10 through within 1 mm of both marks; measured (docs/suturing.md, "The
-  // suturing scene"): 19 of 20 through (seed 11 never reaches the pad), 2 within 1 mm of both — a
-  // knot's 2 mm moves the needle's entry by as much, and the jitter between knots shakes the
-  // needle in the tissue — and none diverged. With the steel wire's 78 mg and triangles that turn
-  // their push over with them, 6 of these 20 diverged ("What diverged, and the two changes").
-  // Which seeds diverge changes with anything in the scene: what this checks is that it does not
-  // get worse, and that no run tunnels.
-  EXPECT_GE(through, 17);
+  std::printf("perturbed by ±2 mm: %d of %u with both passes through (the first %d), %d of %u within 1 mm of "
+              "all four marks, %d diverged\n",
+              through, kSeeds, first_through, at_marks, kSeeds, diverged);
+  // The issue asks 10 of 10 with both passes through within 1 mm of their marks; measured
+  // (docs/suturing.md, "The suturing scene"): the first pass through in 18 of 20 (seeds 2 and 11
+  // never go in), both in 3 (the hand-back between the passes, scripted open loop, fails once
+  // the needle sits otherwise in the jaws than the script assumes), none within 1 mm of all four
+  // marks (a knot's 2 mm moves the needle's entry by as much), none diverged. What this checks is
+  // that it does not get worse, and that no run tunnels.
+  EXPECT_GE(first_through, 17);
+  EXPECT_GE(through, 3);
   EXPECT_LE(diverged, 1);
 }
 
@@ -158,9 +164,10 @@ TEST(SuturingScene, MarksAreReadAndNeedAPunctureForce) {
   const std::string text = numen::test::shipped_scene_text("suturing.toml");
   const numen::sim::Scene s = numen::sim::load_scene(dir.write("s.toml", text));
   ASSERT_EQ(s.needle_marks.size(), 1u);
-  ASSERT_TRUE(s.needle_marks[0].entry && s.needle_marks[0].exit);
-  EXPECT_NEAR(s.needle_marks[0].entry->z(), 0.0, 1e-6) << "on the pad's top";
-  EXPECT_NEAR(s.needle_marks[0].exit->z(), 0.0, 1e-6) << "on the pad's top";
+  ASSERT_EQ(s.needle_marks[0].entry.size(), 2u) << "one per pass";
+  ASSERT_EQ(s.needle_marks[0].exit.size(), 2u);
+  for (const numen::core::Vec3& p : s.needle_marks[0].entry) EXPECT_NEAR(p.z(), 0.0, 1e-6) << "on the pad's top";
+  for (const numen::core::Vec3& p : s.needle_marks[0].exit) EXPECT_NEAR(p.z(), 0.0, 1e-6) << "on the pad's top";
   const std::size_t at = text.find("puncture_force = 1.0\n");
   ASSERT_NE(at, std::string::npos);
   const std::string no_force = text.substr(0, at) + text.substr(at + std::string("puncture_force = 1.0\n").size());

@@ -40,6 +40,13 @@ std::pair<int, int> where(const std::string& text, const std::string& key, const
   return {line, static_cast<int>(text.find(value, at) - text.rfind('\n', at))};
 }
 
+/// Nine marks "[0.0, 0.0, 0.0], ..." (one more than kMaxNeedlePasses).
+std::string nine_points() {
+  std::string out;
+  for (int i = 0; i < 9; ++i) out += (i ? ", " : "") + std::string("[0.0, 0.0, 0.0]");
+  return out;
+}
+
 }  // namespace
 
 TEST(SceneNeedle, KeysAreReadWithTheirDefaults) {
@@ -60,6 +67,8 @@ material = "steel"
 position = [0.0, 0.15, 0.1]
 orientation = [0.0, 1.0, 0.0, 0.0]
 puncture_force = 1.5
+entry_mark = [[0.0, 0.15, 0.05], [0.01, 0.15, 0.05]]
+exit_mark = [0.0, 0.16, 0.05]
 )");
   const numen::sim::Scene s = numen::sim::load_scene(dir.write("needle.toml", text));
   ASSERT_EQ(s.model.needles.size(), 2u);
@@ -81,6 +90,12 @@ puncture_force = 1.5
   const numen::core::BodyModel& sb = s.model.bodies[static_cast<std::size_t>(small.body)];
   EXPECT_EQ(sb.mass, 5.0e-5);
   EXPECT_NEAR(std::abs(sb.initial_pose.orientation.x()), 1.0, 1e-12);
+  ASSERT_EQ(s.needle_marks.size(), 2u);
+  EXPECT_TRUE(s.needle_marks[0].entry.empty() && s.needle_marks[0].exit.empty());
+  ASSERT_EQ(s.needle_marks[1].entry.size(), 2u) << "a list of marks: one per pass";
+  EXPECT_EQ(s.needle_marks[1].entry[1], numen::core::Vec3(0.01, 0.15, 0.05));
+  ASSERT_EQ(s.needle_marks[1].exit.size(), 1u) << "one point: one pass";
+  EXPECT_EQ(s.needle_marks[1].exit[0], numen::core::Vec3(0.0, 0.16, 0.05));
 }
 
 TEST(SceneNeedle, BadNeedlesAreLocatedErrorsNamingTheirKeys) {
@@ -109,6 +124,14 @@ TEST(SceneNeedle, BadNeedlesAreLocatedErrorsNamingTheirKeys) {
       {"position = [0.07072, 0.02836, -0.04475]\n", "position = ", "[0.07072", "needle[0].position",
        "starts inside the tissue of deformable \"organ\""},
       {"radius_mm = 8.0\nposition = [0.0, 0.1, 0.1]\n", "radius_mm = ", "8.0", "needle[0].radius_mm", "unknown key"},
+      {"puncture_force = 1.0\nentry_mark = [[0.0, 0.0, 0.0], [0.0, 0.0]]\nposition = [0.0, 0.1, 0.1]\n",
+       "entry_mark = ", "[0.0, 0.0]]", "needle[0].entry_mark[1]", "expected 3 numbers, found 2"},
+      {"puncture_force = 1.0\nexit_mark = [[0.0, 0.0, 0.0], [0.0, \"y\", 0.0]]\nposition = [0.0, 0.1, 0.1]\n",
+       "exit_mark = ", "\"y\"", "needle[0].exit_mark[1][1]", "expected a number"},
+      {"puncture_force = 1.0\nexit_mark = [[0.0, 0.0, 0.0], 1.0]\nposition = [0.0, 0.1, 0.1]\n", "exit_mark = ",
+       "1.0]", "needle[0].exit_mark[1]", "expected a point [x, y, z]"},
+      {"puncture_force = 1.0\nentry_mark = [" + nine_points() + "]\nposition = [0.0, 0.1, 0.1]\n", "entry_mark = ",
+       "[[0.0", "needle[0].entry_mark", "at most 8 marks (one per pass)"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.keys);

@@ -171,6 +171,18 @@ struct TaskSummary {
   std::vector<std::string> lines;
 };
 
+/// Most passes a needle's marks name and its run's figures record (`entry_mark`, `exit_mark`;
+/// NeedleRunFigures::passes).
+inline constexpr std::size_t kMaxNeedlePasses = 8;
+
+/// One pass of a needle through tissue: an entry and, once it went through, the exit that
+/// followed it. Material points at rest (m, world: the punctured triangle's rest nodes by the
+/// point's weights) and their times (s; −1: none).
+struct NeedlePassFigures {
+  std::array<double, 3> entry{}, exit{};
+  double entry_s = -1.0, exit_s = -1.0;
+};
+
 /// One needle's passage over a run (needle_summary.hpp; docs/suturing.md, "The needle through
 /// tissue"), accumulated step by step.
 struct NeedleRunFigures {
@@ -183,13 +195,14 @@ struct NeedleRunFigures {
   double puncture_tip_force_n = 0.0;   ///< Its tip's force along it at its last puncture (N).
   double puncture_force_n = 0.0;       ///< Its threshold (NeedleModel::puncture_force; 0: none).
   double deviation_max_mm = 0.0;       ///< Largest deviation of a puncture point from its arc (mm).
-  /// The first entry's and the first exit's material point at rest (m, world: the punctured
-  /// triangle's rest nodes by the point's weights), their times (s; −1: none).
-  std::array<double, 3> entry{}, exit{};
-  double entry_s = -1.0, exit_s = -1.0;
-  /// The scene's marks (`entry_mark`, `exit_mark`, m, world), if given.
-  bool has_entry_mark = false, has_exit_mark = false;
-  std::array<double, 3> entry_mark{}, exit_mark{};
+  /// Its passes in order, [0, num_passes): each entry starts one; an entry drawn back out before
+  /// an exit (every point let go, or a new entry) is replaced by the next; an exit ends the open
+  /// pass (a pass through). Entries past kMaxNeedlePasses are counted in passes_lost.
+  std::array<NeedlePassFigures, kMaxNeedlePasses> passes{};
+  std::size_t num_passes = 0;
+  std::int64_t passes_lost = 0;
+  /// The scene's marks (`entry_mark`, `exit_mark`, m, world), one per pass, if given.
+  std::vector<std::array<double, 3>> entry_marks, exit_marks;
 };
 
 struct RunSummary {
@@ -336,7 +349,7 @@ struct RunSummary {
   std::int64_t needle_exits = 0;         ///< Exits.
   std::int64_t needle_releases = 0;      ///< Puncture points let go.
   std::int64_t needle_tunnels = 0;       ///< Tunnels (each needle's a warning; exit status 7).
-  std::int64_t needle_passes = 0;        ///< Needles whose pass went through (an entry, then an exit).
+  std::int64_t needle_passes = 0;        ///< Passes that went through (an entry, then an exit), all needles.
   double needle_puncture_tip_force_n = 0.0;  ///< Tip force at the run's last puncture (N).
   double needle_puncture_force_n = 0.0;  ///< That needle's threshold (N).
   double needle_deviation_max_mm = 0.0;  ///< Largest deviation of a puncture point from its arc (mm).
@@ -346,8 +359,8 @@ struct RunSummary {
   double needle_tissue_force_max_n = 0.0;
   double needle_tissue_force_max_s = -1.0;  ///< When (s; −1: never any force on the tissue).
   bool needle_marks = false;             ///< A needle has an entry_mark or exit_mark.
-  /// Largest distance of a needle's first entry (exit) from its mark (mm; −1: a marked needle
-  /// that never went in, or never came out).
+  /// Largest distance of a needle's k-th pass's entry (exit) from its k-th mark, over the marked
+  /// passes of all needles (mm; −1: a marked pass that never went in, or never came out).
   double needle_entry_error_mm = -1.0;
   double needle_exit_error_mm = -1.0;
   /// Per needle: "NAME: 1 puncture, 1 exit, ...; through; ..." (summarize_needles()).

@@ -152,12 +152,14 @@ struct SceneTask {
   double reach = 0.005;
 };
 
-/// Where a needle should go into tissue and come out (`[[needle]]` `entry_mark`, `exit_mark`;
-/// docs/suturing.md, "The suturing scene"): world points (m) on a deformable's rest surface. The
-/// run's summary gives the distance of the needle's first entry and exit from them (needle.*).
+/// Where a needle should go into tissue and come out, pass by pass (`[[needle]]` `entry_mark`,
+/// `exit_mark`: a point, or a list of points, one per pass; docs/suturing.md, "The suturing
+/// scene"): world points (m) on a deformable's rest surface. The run's summary gives the distance
+/// of the needle's k-th pass's entry and exit (an entry followed by an exit) from the k-th marks
+/// (needle.*). Either list may be empty (no such mark).
 struct NeedleMarks {
-  std::optional<core::Vec3> entry;
-  std::optional<core::Vec3> exit;
+  std::vector<core::Vec3> entry;
+  std::vector<core::Vec3> exit;
 };
 
 /// Everything a run of a scene needs.
