@@ -6,9 +6,9 @@ Deterministic, no input data: this script is the scene's whole provenance. Regen
 
     python3 sim/data/make_suturing.py > sim/scenes/suturing.toml
 
-`python3 sim/data/make_suturing.py --perturb SEED` writes the same scene with every knot of
-both paths moved by up to ±2 mm (uniform in each coordinate, seeded): the perturbed runs of
-docs/suturing.md (tests/sim/run/suturing_scene_test.cpp makes its own the same way).
+`python3 sim/data/make_suturing.py --perturb SEED` writes the same scene with each device's path
+moved by a smooth offset of up to ±2 mm on each coordinate (seeded; `perturbed()`): the perturbed
+runs of docs/suturing.md (tests/sim/run/suturing_scene_test.cpp makes its own the same way).
 
 The pass. The right driver holds the needle near its tail, its plane normal to the shaft, and
 rolls it about the arc's own axis (the tip goes round its circle; the jaws' hinge goes round the
@@ -77,6 +77,9 @@ PASSES = 2                     # suture passes, each through its own entry and e
 PASS_SPACING = 0.006           # m between the passes' arcs, along the wound (x)
 DRAW = 0.06                    # m: the left draws the needle back along its shaft after a pass but the
                                # last, pulling through thread enough for the next (0.02: 38 N on it)
+PERTURB = 0.002                # m: the perturbed runs' largest offset of a path on each coordinate
+PERTURB_WAVES = 3              # sines a coordinate
+PERTURB_BAND = (0.2, 1.0)      # Hz: their frequencies (slow, as a hand's drift, not a tremor)
 LIFT = 0.010                   # m: the arc's centre above a pass's start at the hand-back between passes
 TURN_RATE = math.radians(60.0) # rad/s: the tip at 8.7 mm/s (JIGSAWS suturing's tool tips: up to 0.3 m/s)
 
@@ -287,10 +290,10 @@ class Path:
         for hinge, q in knots[1:]:
             self.move(hinge, q, duration)
 
-    def travel(self, trocar, to, q, duration, jitter):
+    def travel(self, trocar, to, q, duration):
         """To `to` with orientation `q` (its roll about the shaft) in knots of at most 0.1 s, each
         the straight line's point with the orientation's share of the turn, as the trocar gives
-        it; every knot but the last moved by `jitter`."""
+        it."""
         steps = max(1, int(math.ceil(duration / 0.1 - 1e-9)))
         frm, q_from = self.at, self.q
         turn = qlog(qmul(q, qconj(q_from)))
@@ -298,7 +301,7 @@ class Path:
             s = k / steps
             hinge = add(frm, mul(sub(to, frm), s))
             wanted = trocar_tool(trocar, hinge, qmul(qexp(mul(turn, s)), q_from))
-            self.move(hinge if k == steps else jitter(hinge), wanted, duration / steps)
+            self.move(hinge, wanted, duration / steps)
 
 
 def vec(v):
@@ -318,25 +321,19 @@ def hand_over(taker, giver, knot):
     taker.until(giver.t)
 
 
-def paths(rng=None):
-    """The two drivers' paths through PASSES passes; with `rng`, every knot moved by up to ±2 mm
-    in each coordinate (the first pass's knots drawn first, in the order of the one-pass scene)."""
-    jitter = (lambda p: add(p, tuple(rng.uniform(-0.002, 0.002) for _ in range(3)))) if rng else (lambda p: p)
-
-    def jittered(knots):
-        return [knots[0]] + [(jitter(h), q) for h, q in knots[1:]]
-
+def paths():
+    """The two drivers' paths through PASSES passes."""
     tip_after = TIP_START - TURN_R
-    right_knots = jittered(turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R))
-    left_knots = jittered(turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L))
+    right_knots = (turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R))
+    left_knots = (turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L))
     # Right: closes on the needle where it lies, turns it through the pad, opens, draws back.
     right = Path(*right_knots[0])
     right.hold(0.2)
     right.hold(0.3, CLOSED)
     for k, centre in enumerate(CENTRES):
         if k > 0:
-            right_knots = jittered(turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R, centre))
-            left_knots = jittered(turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L, centre))
+            right_knots = (turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R, centre))
+            left_knots = (turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L, centre))
             # The hand-back, over the next pass's start with its arc's centre LIFT up (the arc
             # clear of the pad) and the needle half a turn from its start (the tip towards the
             # exit's side): there the left's grip near the tip and the right's near the tail keep
@@ -356,16 +353,16 @@ def paths(rng=None):
             poses = [(previous, TURN_L), (back, TURN_L)]
             poses += [(add(back, mul(sub(lifted, back), i / steps)), TURN_L + (handback - TURN_L) * i / steps)
                       for i in range(1, steps + 1)]
-            carry = jittered(carried_path(TROCAR_L, tip_after + GRIP_L, poses, previous))
+            carry = (carried_path(TROCAR_L, tip_after + GRIP_L, poses, previous))
             left.follow(carry[:2], 0.5)
             left.follow(carry[1:], KNOT / TURN_RATE)
-            over = jittered(carried_path(TROCAR_R, TIP_START + GRIP_R,
+            over = (carried_path(TROCAR_R, TIP_START + GRIP_R,
                                          [(lifted, math.pi - math.pi * i / 36) for i in range(37)] +
                                          [(add(lifted, mul(sub(centre, lifted), i / 5)), 0.0) for i in range(1, 6)],
                                          centre))
             rh, rq = over[0]
             right.until(left.t)
-            right.travel(TROCAR_R, add(rh, mul(N_AXIS, -0.03)), rq, 1.5, jitter)
+            right.travel(TROCAR_R, add(rh, mul(N_AXIS, -0.03)), rq, 1.5)
             hand_over(right, left, over[0])
             right.follow(over[:37])
             right.follow(over[36:], 0.1)
@@ -376,7 +373,7 @@ def paths(rng=None):
         if k == 0:
             left = Path(add(lh, mul(N_AXIS, -0.03)), lq)
         else:
-            left.travel(TROCAR_L, add(lh, mul(N_AXIS, -0.03)), lq, 1.0, jitter)
+            left.travel(TROCAR_L, add(lh, mul(N_AXIS, -0.03)), lq, 1.0)
         left.until(t_out - 1.0)
         hand_over(left, right, left_knots[0])
         left.follow(left_knots)
@@ -422,8 +419,37 @@ HEADER = """# numen suturing: two suture passes (docs/suturing.md, "The suturing
 """
 
 
-def scene(rng=None):
-    right, left = paths(rng)
+def perturbed(text, seed):
+    """`text` with each device's path moved by a smooth offset of at most ±2 mm on each
+    coordinate (PERTURB_WAVES sines a coordinate, frequencies in PERTURB_BAND, random phases and
+    weights, seeded): every knot (`to = [...]` of a line segment) by the offset at its time, so
+    that the perturbed paths keep the recordings' speeds (at most 2 pi f 2 mm = 13 mm/s added);
+    ramped in over the first second (the needle starts in the right's jaws)."""
+    rng = random.Random(seed)
+    lines, out = text.split("\n"), []
+    offset, t, pending = None, 0.0, None
+    for line in lines:
+        if line.startswith("[device.trajectory]"):
+            waves = [[(rng.uniform(*PERTURB_BAND), rng.uniform(0, 2 * math.pi), rng.uniform(0.5, 1.0))
+                      for _ in range(PERTURB_WAVES)] for _ in range(3)]
+            offset = lambda t, w=waves: tuple(  # noqa: E731  ramped in over the first second
+                PERTURB * min(1.0, t) * sum(a * math.sin(2 * math.pi * f * t + ph) for f, ph, a in c) / sum(a for _, _, a in c)
+                for c in w)
+            t = 0.0
+        if offset and line.startswith("to = ["):
+            pending = len(out)
+        if offset and line.startswith("duration = "):
+            t += float(line.split("=")[1])
+            if pending is not None:
+                p = [float(v) for v in out[pending][len("to = ["):-1].split(",")]
+                out[pending] = "to = " + vec(add(p, offset(t)))
+                pending = None
+        out.append(line)
+    return "\n".join(out)
+
+
+def scene():
+    right, left = paths()
     duration = max(right.t, left.t)
     out = [HEADER, f"""name = "suturing"
 description = "Two suture passes through a tissue pad: the needle driven along its arc from an entry mark to an exit mark by one trocar needle driver, handed to the other, pulled through with its thread, handed back and driven through the next pair of marks"
@@ -532,12 +558,13 @@ seed = 1
 
 
 def main():
-    rng = None
-    if len(sys.argv) == 3 and sys.argv[1] == "--perturb":
-        rng = random.Random(int(sys.argv[2]))
-    elif len(sys.argv) != 1:
+    args = sys.argv[1:]
+    text = scene()
+    if len(args) == 2 and args[0] == "--perturb":
+        text = perturbed(text, int(args[1]))
+    elif args:
         sys.exit("usage: make_suturing.py [--perturb SEED]")
-    print(scene(rng), end="")
+    print(text, end="")
 
 
 if __name__ == "__main__":
