@@ -48,19 +48,24 @@ NEEDLE_MASS = 0.002            # kg: the needle's simulated mass, not the steel 
 
 # ---- the pad: a box net on an anchored core, its top at z = 0. Its constants are the needle
 # puncture rig's (tests/core/needle_puncture_test.cpp) on a 1 442-node pad of 1 x 0.83 mm on its
-# top face, kept per area at this coarser net: a surface net's springs (stretch and bending) give
+# top face, kept per area at the coarser 24 x 20 mm net of 496 nodes and per node on this one, wider
+# along y with the same cells: a surface net's springs (stretch and bending) give
 # a membrane whose stiffness does not depend on the edge length, so they stay; the mass and the
 # ties to the core are per area (docs/suturing.md, "The pad's net size and the step").
-PAD_HALF = (0.012, 0.010, 0.004)  # m: 24 x 20 x 8 mm
-PAD_SUBDIVISIONS = (12, 12, 2)   # per axis: the top and bottom faces a 13 x 13 grid (2 x 1.67 mm
+PAD_HALF = (0.012, 0.04 / 3, 0.004)  # m: 24 x 26.7 x 8 mm: the needle's tip starts 4.5 mm inside
+                                 # the pad's edge (y), 2.5 mm with its hand 2 mm off
+                                 # (docs/suturing.md, "A tunnel at the pad's edge")
+PAD_SUBDIVISIONS = (12, 16, 2)   # per axis: the top and bottom faces a 13 x 17 grid (2 x 1.67 mm
                                  # on the top), the sides 3 rows of 2.7 mm (the needle meets the top
                                  # face alone)
 PAD_NODES = ((PAD_SUBDIVISIONS[0] + 2) * (PAD_SUBDIVISIONS[1] + 2) * (PAD_SUBDIVISIONS[2] + 2)
              - PAD_SUBDIVISIONS[0] * PAD_SUBDIVISIONS[1] * PAD_SUBDIVISIONS[2])
 PAD_REFERENCE_NODES = 1442       # the constants' pad: (23, 23, 2), 70 mg, 100 N/m and 0.17 N s/m a node
-PAD_MASS = 7e-5 * PAD_REFERENCE_NODES           # kg
-PAD_TIE_STIFFNESS = 100.0 * PAD_REFERENCE_NODES / PAD_NODES  # N/m a node: the same per area
-PAD_TIE_DAMPING = 0.17 * PAD_REFERENCE_NODES / PAD_NODES     # N s/m a node
+PAD_FIRST_NODES = 496            # the 24 x 20 mm pad (12, 12, 2) its constants were first kept per area on:
+                                 # the wider pad keeps them per node (the top face's cells the same)
+PAD_MASS = 7e-5 * PAD_REFERENCE_NODES * PAD_NODES / PAD_FIRST_NODES  # kg
+PAD_TIE_STIFFNESS = 100.0 * PAD_REFERENCE_NODES / PAD_FIRST_NODES  # N/m a node: the same per area
+PAD_TIE_DAMPING = 0.17 * PAD_REFERENCE_NODES / PAD_FIRST_NODES     # N s/m a node
 
 # ---- the pass: the needle's plane normal to the arc's axis N, tilted ALPHA from horizontal
 ALPHA = math.radians(20.0)     # the shafts come down at 20 deg from the horizontal, from +x
@@ -474,7 +479,7 @@ stiffness = 2.0e4     # N/m per sphere contact
 damping = 10.0        # N·s/m
 friction = 0.5        # N·s/m, viscous tangential
 
-# ---- the pad: a 24 x 20 x 8 mm box net (2 x 1.67 mm on its top face, 2.7 mm rows on its sides), each node tied to its rest place
+# ---- the pad: a 24 x 26.7 x 8 mm box net (2 x 1.67 mm on its top face, 2.7 mm rows on its sides), each node tied to its rest place
 # on an anchored core (the organ's constants per spring, as tests/core/needle_puncture_test.cpp's)
 
 [[body]]
@@ -496,7 +501,7 @@ stiffness = 200.0
 damping = 0.1
 bending_stiffness = 50.0
 bending_damping = 0.03
-tie_stiffness = {PAD_TIE_STIFFNESS:.1f}   # N/m a node: 100 on the 1 442-node pad, the same per area
+tie_stiffness = {PAD_TIE_STIFFNESS:.1f}   # N/m a node: 100 on the 1 442-node pad, the same per area on the 24 x 20 mm pad of 496 nodes, kept per node
 tie_damping = {PAD_TIE_DAMPING:.4f}
 material = "tissue"
 

@@ -154,12 +154,12 @@ TEST(SuturingFigures, TwentyPassesWithTheirPathsPerturbedByTwoMillimetres) {
               "all four marks, %d diverged\n",
               through, kSeeds, first_through, at_marks, kSeeds, diverged);
   // The issue asks 10 of 10 with both passes through within 1 mm of their marks; measured
-  // (docs/suturing.md, "The suturing scene"): the first pass through in 19 of 20 (seed 3 never
-  // goes in), both in 15 (the hand-back between the passes, scripted open loop, fails where the
-  // needle sits otherwise in the jaws than the script assumes), 1 within 1 mm of all four marks
-  // (seed 7: a 2 mm offset of the hand moves the needle's entry by as much), none diverged. What
-  // this checks is that it does not get worse, and that no run tunnels.
-  EXPECT_GE(first_through, 18);
+  // (docs/suturing.md, "The suturing scene"): the first pass through in 20 of 20, both in 15 (the
+  // hand-back between the passes, scripted open loop, fails where the needle sits otherwise in
+  // the jaws than the script assumes), 1 within 1 mm of all four marks (seed 7: a 2 mm offset of
+  // the hand moves the needle's entry by as much), none diverged. What this checks is that it
+  // does not get worse, and that no run tunnels.
+  EXPECT_GE(first_through, 19);
   EXPECT_GE(through, 13);
   EXPECT_LE(diverged, 1);
 }
