@@ -154,11 +154,12 @@ TEST(SuturingFigures, TwentyPassesWithTheirPathsPerturbedByTwoMillimetres) {
               "all four marks, %d diverged\n",
               through, kSeeds, first_through, at_marks, kSeeds, diverged);
   // The issue asks 10 of 10 with both passes through within 1 mm of their marks; measured
-  // (docs/suturing.md, "The suturing scene"): the first pass through in 20 of 20, both in 15 (the
-  // hand-back between the passes, scripted open loop, fails where the needle sits otherwise in
-  // the jaws than the script assumes), 1 within 1 mm of all four marks (seed 7: a 2 mm offset of
-  // the hand moves the needle's entry by as much), none diverged. What this checks is that it
-  // does not get worse, and that no run tunnels.
+  // (docs/suturing.md, "The suturing scene"): the first pass through in 20 of 20, both in 15 (of
+  // the five, three hands 2 mm high carry the arc over the pad at a glancing angle and the tip
+  // skims under the surface without puncturing; in two a driver's jaws miss the wire at a
+  // hand-over), 1 within 1 mm of all four marks (seed 7: a 2 mm offset of the hand moves the
+  // needle's entry by as much), none diverged. What this checks is that it does not get worse,
+  // and that no run tunnels.
   EXPECT_GE(first_through, 19);
   EXPECT_GE(through, 13);
   EXPECT_LE(diverged, 1);
