@@ -329,16 +329,16 @@ def hand_over(taker, giver, knot):
 def paths():
     """The two drivers' paths through PASSES passes."""
     tip_after = TIP_START - TURN_R
-    right_knots = (turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R))
-    left_knots = (turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L))
+    right_knots = turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R)
+    left_knots = turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L)
     # Right: closes on the needle where it lies, turns it through the pad, opens, draws back.
     right = Path(*right_knots[0])
     right.hold(0.2)
     right.hold(0.3, CLOSED)
     for k, centre in enumerate(CENTRES):
         if k > 0:
-            right_knots = (turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R, centre))
-            left_knots = (turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L, centre))
+            right_knots = turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R, centre)
+            left_knots = turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L, centre)
             # The hand-back, over the next pass's start with its arc's centre LIFT up (the arc
             # clear of the pad) and the needle half a turn from its start (the tip towards the
             # exit's side): there the left's grip near the tip and the right's near the tail keep
@@ -358,13 +358,13 @@ def paths():
             poses = [(previous, TURN_L), (back, TURN_L)]
             poses += [(add(back, mul(sub(lifted, back), i / steps)), TURN_L + (handback - TURN_L) * i / steps)
                       for i in range(1, steps + 1)]
-            carry = (carried_path(TROCAR_L, tip_after + GRIP_L, poses, previous))
+            carry = carried_path(TROCAR_L, tip_after + GRIP_L, poses, previous)
             left.follow(carry[:2], 0.5)
             left.follow(carry[1:], KNOT / TURN_RATE)
-            over = (carried_path(TROCAR_R, TIP_START + GRIP_R,
-                                         [(lifted, math.pi - math.pi * i / 36) for i in range(37)] +
-                                         [(add(lifted, mul(sub(centre, lifted), i / 5)), 0.0) for i in range(1, 6)],
-                                         centre))
+            over = carried_path(TROCAR_R, TIP_START + GRIP_R,
+                                [(lifted, math.pi - math.pi * i / 36) for i in range(37)] +
+                                [(add(lifted, mul(sub(centre, lifted), i / 5)), 0.0) for i in range(1, 6)],
+                                centre)
             rh, rq = over[0]
             right.until(left.t)
             right.travel(TROCAR_R, add(rh, mul(N_AXIS, -0.03)), rq, 1.5)
@@ -418,9 +418,10 @@ HEADER = """# numen suturing: two suture passes (docs/suturing.md, "The suturing
 # punctures the pad at the entry mark, runs under the surface and comes out at the exit mark; the
 # left driver takes the wire near the tip, the right lets go and draws back, the left rolls the
 # needle on until its tail has left the pad. The left then hands the needle back to the right over
-# the second pass's marks, 6 mm along the wound, and the pass is made again there. The summary's needle figures (docs/outputs.md,
-# `needle.*`): punctures, exits, tunnels, the tip force at the puncture against its threshold,
-# the deviation from the arc, the entry and exit errors from the marks.
+# the second pass's marks, 6 mm along the wound, and the pass is made again there. The summary's
+# needle figures (docs/outputs.md, `needle.*`): punctures, exits, tunnels, the tip force at the
+# puncture against its threshold, the deviation from the arc, each pass's entry and exit errors
+# from its marks.
 """
 
 
