@@ -135,15 +135,19 @@ std::string TomlTable::choice(std::string_view key, const std::vector<std::strin
 std::vector<double> TomlTable::numbers(std::string_view key, int n) const {
   const toml::node* node = table_->get(key);
   if (!node) fail(key, "missing (an array of numbers is required)");
-  const toml::array* arr = node->as_array();
-  if (!arr) fail(key, std::string("expected an array of numbers, found ") + type_name(*node));
+  return array_numbers(*node, key_path(key), n);
+}
+
+std::vector<double> TomlTable::array_numbers(const toml::node& node, const std::string& key, int n) const {
+  const toml::array* arr = node.as_array();
+  if (!arr) fail_at(&node, key, std::string("expected an array of numbers, found ") + type_name(node));
   if (n >= 0 && static_cast<int>(arr->size()) != n)
-    fail(key, "expected " + std::to_string(n) + " numbers, found " + std::to_string(arr->size()));
+    fail_at(&node, key, "expected " + std::to_string(n) + " numbers, found " + std::to_string(arr->size()));
   std::vector<double> out;
   out.reserve(arr->size());
   for (std::size_t i = 0; i < arr->size(); ++i) {
     auto v = as_number(*arr->get(i));
-    const std::string k = key_path(key) + "[" + std::to_string(i) + "]";
+    const std::string k = key + "[" + std::to_string(i) + "]";
     if (!v) fail_at(arr->get(i), k, std::string("expected a number, found ") + type_name(*arr->get(i)));
     if (!std::isfinite(*v)) fail_at(arr->get(i), k, "must be finite");
     out.push_back(*v);
@@ -167,19 +171,11 @@ std::vector<core::Vec3> TomlTable::points(std::string_view key) const {
   std::vector<core::Vec3> out;
   out.reserve(arr->size());
   for (std::size_t i = 0; i < arr->size(); ++i) {
+    const toml::node& p = *arr->get(i);
     const std::string k = key_path(key) + "[" + std::to_string(i) + "]";
-    const toml::array* p = arr->get(i)->as_array();
-    if (!p) fail_at(arr->get(i), k, std::string("expected a point [x, y, z], found ") + type_name(*arr->get(i)));
-    if (p->size() != 3) fail_at(arr->get(i), k, "expected 3 numbers, found " + std::to_string(p->size()));
-    core::Vec3 v;
-    for (std::size_t j = 0; j < 3; ++j) {
-      const auto x = as_number(*p->get(j));
-      const std::string kj = k + "[" + std::to_string(j) + "]";
-      if (!x) fail_at(p->get(j), kj, std::string("expected a number, found ") + type_name(*p->get(j)));
-      if (!std::isfinite(*x)) fail_at(p->get(j), kj, "must be finite");
-      v[static_cast<Eigen::Index>(j)] = *x;
-    }
-    out.push_back(v);
+    if (!p.is_array()) fail_at(&p, k, std::string("expected a point [x, y, z], found ") + type_name(p));
+    const std::vector<double> v = array_numbers(p, k, 3);
+    out.emplace_back(v[0], v[1], v[2]);
   }
   return out;
 }

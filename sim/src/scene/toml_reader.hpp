@@ -76,6 +76,9 @@ class TomlTable {
   const toml::table& raw() const { return *table_; }
 
  private:
+  /// `node` as a list of n finite numbers (n < 0: any length); errors located at it as `key`.
+  std::vector<double> array_numbers(const toml::node& node, const std::string& key, int n) const;
+
   const toml::table* table_;
   std::string path_;
   const std::string* file_;
