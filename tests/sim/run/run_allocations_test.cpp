@@ -66,23 +66,23 @@ class CountingViewSink final : public numen::platform::StateFrameSink {
 /// Returns the run's summary (the callers may check what the 10,000 periods exercised); the
 /// viewer's smallest frame (bytes) in `*smallest_frame` when given.
 RunSummary expect_no_allocation(const Scene& scene, const char* name,
-                                std::int64_t* smallest_frame = nullptr) {
-  SceneRunner runner(scene, 10'000);  // construction allocates (trace storage too)
+                                std::int64_t* smallest_frame = nullptr, int periods = 10'000) {
+  SceneRunner runner(scene, periods);  // construction allocates (trace storage too)
   // A viewer is connected: the state stream publishes every period (1 kHz, its worst case).
   CountingViewSink viewer;
   runner.stream_view("", {&viewer}, 1.0 / scene.model.dt, false);
   std::int64_t count = -1;
   {
     numen::test::AllocationGuard guard;
-    for (int k = 0; k < 10'000; ++k) runner.period();
+    for (int k = 0; k < periods; ++k) runner.period();
     count = guard.count();
   }
-  EXPECT_EQ(count, 0) << name << ": heap allocations in 10,000 periods";
-  EXPECT_EQ(runner.periods(), 10'000);
-  EXPECT_EQ(runner.trace().records().size(), 10'000u);
+  EXPECT_EQ(count, 0) << name << ": heap allocations in " << periods << " periods";
+  EXPECT_EQ(runner.periods(), periods);
+  EXPECT_EQ(runner.trace().records().size(), static_cast<std::size_t>(periods));
   runner.finish();
   const RunSummary s = runner.summary();
-  EXPECT_EQ(s.view_frames_published + s.view_frames_dropped, 10'000) << name;
+  EXPECT_EQ(s.view_frames_published + s.view_frames_dropped, periods) << name;
   EXPECT_EQ(viewer.frames.load(), s.view_frames_published) << name;
   if (smallest_frame != nullptr) *smallest_frame = viewer.smallest.load();
   EXPECT_GT(s.contacts_max + s.node_contacts_max, 0)
@@ -154,15 +154,20 @@ TEST(RunAllocations, PegTransferScenePeriodNeverAllocates) {
 
 TEST(RunAllocations, SuturingScenePeriodNeverAllocates) {
   // Two devices, the needle grasped, driven through the pad (its puncture points tied to it), handed
-  // over and pulled through, its thread stepped every period (docs/suturing.md, "The suturing scene").
+  // over and pulled through, handed back and driven through again, its thread stepped every period
+  // and drawn through all four puncture points (docs/suturing.md, "The suturing scene"): the
+  // whole scene.
   NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();
   const Scene scene = numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/suturing.toml");
   std::int64_t smallest_frame = 0;
-  const RunSummary s = expect_no_allocation(scene, "suturing", &smallest_frame);
+  const RunSummary s = expect_no_allocation(scene, "suturing", &smallest_frame,
+                                            static_cast<int>(std::lround(scene.duration_s / scene.model.dt)));
   EXPECT_GE(s.needle_punctures, 1) << "the puncture path was not exercised";
   EXPECT_GE(s.needle_exits, 1) << "the exit path was not exercised";
+  EXPECT_EQ(s.needle_passes, 2) << "the second pass was not exercised";
+  EXPECT_EQ(s.thread_eyelets_taken, 4) << "the thread was not drawn through the second pass";
   // Every frame carried the thread's 101 nodes (issue 69: the view draws it), encoded on the loop.
   const numen::platform::StateFrameLayout layout = numen::sim::view_frame_layout(scene);
   EXPECT_EQ(layout.num_thread_nodes, 101u);
