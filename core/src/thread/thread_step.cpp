@@ -123,9 +123,11 @@ void add_point_term(const ThreadState& st, const std::vector<Vec3>& v, const Thr
 
 /// The nodes' inertia, gravity, drag and external forces, the stretch springs and the bend
 /// terms at the iterate (x, v) into the band, Newton's form: matrix M + h C + h² S(x),
-/// right-hand side h f(x, v) − M (v − v0).
+/// right-hand side h f(x, v) − M (v − v0). `whole`: each segment's whole stiffness, its part
+/// across k (1 − l0/l) negative where it is compressed (the caller checks that the matrix is
+/// still positive definite); else that part clamped at 0 (positive definite by construction).
 void add_rod_terms(const Model& model, const ThreadModel& th, const ThreadState& st,
-                   const std::vector<Vec3>& x, const std::vector<Vec3>& v, double h,
+                   const std::vector<Vec3>& x, const std::vector<Vec3>& v, double h, bool whole,
                    ThreadBand& band) noexcept {
   const int nodes = th.segments + 1;
   for (int i = 0; i < nodes; ++i) {
@@ -146,7 +148,7 @@ void add_rod_terms(const Model& model, const ThreadModel& th, const ThreadState&
     if (!(l > 0.0)) continue;
     const Vec3 u = d / l;
     const Mat3 uu = u * u.transpose();
-    const double across = std::max(0.0, 1.0 - th.rest_segment / l);
+    const double across = whole ? 1.0 - th.rest_segment / l : std::max(0.0, 1.0 - th.rest_segment / l);
     const Mat3 stiff = (h * h * k) * (uu + across * (Mat3::Identity() - uu));
     const Vec3 f = (h * k * (l - th.rest_segment)) * u;  // h × the force on node a; −it on a + 1
     band.rhs[a + 1] += f;
@@ -283,10 +285,16 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
   double last_move = 0.0;  // the last update's largest node move (m)
   const double tolerance = kThreadNewtonTolerance * th.rest_segment;  // m
   bool met = false;        // the iteration met its tolerance
-  for (int iteration = 0; iteration < kThreadNewtonIterations && ok; ++iteration) {
-    for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
+  // Newton's matrix: from the second iteration on, with each segment's whole stiffness while
+  // its factor says it is positive definite, the thread has no self-contact candidates and its
+  // updates contract; else, and for the rest of the step once one of these fails, with the
+  // compressed segments' part across dropped (docs/thread.md, "The compressed segments' part
+  // across"). An update from the whole matrix that does not contract is not taken: the step's
+  // iterate is solved again with the part dropped.
+  bool whole_allowed = true;
+  auto assemble = [&](int iteration, bool whole) {
     band.clear();
-    add_rod_terms(model, th, st, x, v, h, band);
+    add_rod_terms(model, th, st, x, v, h, whole, band);
     add_tie_block(p0, sc.tie_delta[0], band);
     add_tie_block(p1, sc.tie_delta[1], band);
     const Vec3 at0 = tie_position(p0, sc.tie_delta[0], h), at1 = tie_position(p1, sc.tie_delta[1], h);
@@ -300,22 +308,33 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
     }
     for (int t = 0; t < sc.num_terms; ++t)
       add_point_term(st, v, sc.terms[static_cast<std::size_t>(t)], h, band);
-    // Self contact from the second iteration on: its candidates swept to the first iterate.
-    if (iteration == 1 && th.self_contact && !swept) find_thread_self_pairs(th, st, x, sc);
     const int touching = iteration >= 1 && th.self_contact ? add_thread_self_contacts(model, th, x, v, sc, h, band) : 0;
     st.output.self_contacts = touching;
-    ok = band.solve();
+  };
+  for (int iteration = 0; iteration < kThreadNewtonIterations && ok; ++iteration) {
+    for (std::size_t i = 0; i < n; ++i) x[i] = st.position[i] + h * v[i];
+    // Self contact from the second iteration on: its candidates swept to the first iterate.
+    if (iteration == 1 && th.self_contact && !swept) find_thread_self_pairs(th, st, x, sc);
+    bool whole = whole_allowed && iteration >= 1 && sc.num_self_pairs == 0;
+    double move = 0.0;  // the update's largest node move (m)
+    for (;;) {
+      assemble(iteration, whole);
+      ok = band.solve();
+      double largest = 0.0;
+      for (std::size_t i = 0; ok && i < n; ++i) largest = std::max(largest, band.rhs[i + 1].squaredNorm());
+      move = h * std::sqrt(largest);
+      if (whole && (!ok || !(largest < 1e300) || move >= last_move)) {
+        whole = whole_allowed = false;  // not positive definite, or not contracting: not taken
+        continue;
+      }
+      if (!(largest < 1e300)) ok = false;  // not finite
+      break;
+    }
     if (!ok) break;
     st.output.iterations = iteration + 1;
-    double largest = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      v[i] += band.rhs[i + 1];
-      largest = std::max(largest, band.rhs[i + 1].squaredNorm());
-    }
+    for (std::size_t i = 0; i < n; ++i) v[i] += band.rhs[i + 1];
     if (p0.dynamic) sc.tie_delta[0] += band.rhs[0];
     if (p1.dynamic) sc.tie_delta[1] += band.rhs[n + 1];
-    if (!(largest < 1e300)) ok = false;  // not finite
-    const double move = h * std::sqrt(largest);  // the update's largest node move (m)
     const double theta = iteration >= 1 ? move / last_move : 1.0;
     last_move = move;
     const bool converged =
