@@ -93,6 +93,7 @@ void ThreadScratch::resize(const ThreadModel& t, int model_nodes, int graspers) 
   saved_position.assign(nodes, Vec3::Zero());
   trial_position.assign(nodes, Vec3::Zero());
   trial_velocity.assign(nodes, Vec3::Zero());
+  whole_update.assign(nodes + 2, Vec3::Zero());
   sweep_order.resize(static_cast<std::size_t>(t.segments));
   for (int s = 0; s < t.segments; ++s) sweep_order[static_cast<std::size_t>(s)] = s;
   self_pairs.assign(static_cast<std::size_t>(4 * t.segments), ThreadSelfPair{});

@@ -38,6 +38,12 @@ constexpr double kThreadNewtonTolerance = 1e-6;
 /// Newton's iteration contracts faster (quadratically) near the solution, so the estimate is on
 /// the safe side; it is used for Θ_k below this bound, where it is below ‖Δ_k‖ itself.
 constexpr double kThreadNewtonContraction = 0.5;
+/// An update from Newton's matrix with the compressed segments' part across taken whole
+/// (step_thread()) that moves a node further than the update before it is taken only if it
+/// moves no node more than this many times further than the update with that part dropped, from
+/// the same iterate: both grow from a far start, the whole one alone from a matrix near singular
+/// (docs/thread.md, "The compressed segments' part across").
+constexpr double kThreadNewtonWholeRatio = 2.0;
 
 /// A tie's point: block `block` of the band, where it is and how it moves at the step's start,
 /// and its translational effective mass when a dynamic body's (else it moves as given).
@@ -286,11 +292,12 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
   const double tolerance = kThreadNewtonTolerance * th.rest_segment;  // m
   bool met = false;        // the iteration met its tolerance
   // Newton's matrix: from the second iteration on, with each segment's whole stiffness while
-  // its factor says it is positive definite, the thread has no self-contact candidates and its
-  // updates contract; else, and for the rest of the step once one of these fails, with the
-  // compressed segments' part across dropped (docs/thread.md, "The compressed segments' part
-  // across"). An update from the whole matrix that does not contract is not taken: the step's
-  // iterate is solved again with the part dropped.
+  // its factor says it is positive definite and the thread has no self-contact candidates;
+  // else, and for the rest of the step once one of these fails, with the compressed segments'
+  // part across dropped (docs/thread.md, "The compressed segments' part across"). An update from
+  // the whole matrix that does not contract is checked against the update with the part dropped
+  // from the same iterate (kThreadNewtonWholeRatio); one that fails that is not taken, the
+  // dropped part's is, and the rest of the step keeps the part dropped.
   bool whole_allowed = true;
   auto assemble = [&](int iteration, bool whole) {
     band.clear();
@@ -317,17 +324,34 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
     if (iteration == 1 && th.self_contact && !swept) find_thread_self_pairs(th, st, x, sc);
     bool whole = whole_allowed && iteration >= 1 && sc.num_self_pairs == 0;
     double move = 0.0;  // the update's largest node move (m)
+    double whole_move = -1.0;  // a growing update from the whole matrix, kept (m)
     for (;;) {
       assemble(iteration, whole);
       ok = band.solve();
       double largest = 0.0;
       for (std::size_t i = 0; ok && i < n; ++i) largest = std::max(largest, band.rhs[i + 1].squaredNorm());
       move = h * std::sqrt(largest);
-      if (whole && (!ok || !(largest < 1e300) || move >= last_move)) {
-        whole = whole_allowed = false;  // not positive definite, or not contracting: not taken
+      if (whole && ok && largest < 1e300 && move >= last_move) {
+        // Growing: from a far start (the dropped part's update grows as well) or from a matrix
+        // near singular (it does not). Kept while the iterate is solved with the part dropped.
+        whole_move = move;
+        for (std::size_t i = 0; i < sc.whole_update.size(); ++i) sc.whole_update[i] = band.rhs[i];
+        whole = false;
+        continue;
+      }
+      if (whole && (!ok || !(largest < 1e300))) {
+        whole = whole_allowed = false;  // not positive definite: not taken
         continue;
       }
       if (!(largest < 1e300)) ok = false;  // not finite
+      if (ok && whole_move >= 0.0) {
+        if (whole_move <= kThreadNewtonWholeRatio * move) {  // the whole matrix's update taken
+          for (std::size_t i = 0; i < sc.whole_update.size(); ++i) band.rhs[i] = sc.whole_update[i];
+          move = whole_move;
+        } else {
+          whole_allowed = false;
+        }
+      }
       break;
     }
     if (!ok) break;
