@@ -98,7 +98,8 @@ struct ThreadScratch {
   std::vector<Vec3> trial_position;    ///< Newton's iterate x_k = x0 + h v_k (m).
   std::vector<Vec3> trial_velocity;    ///< Newton's iterate v_k (m/s).
   /// An update from Newton's matrix with the compressed segments' part across whole, kept while
-  /// the same iterate is solved with it dropped (thread_step.cpp), blocks as the band's.
+  /// the same iterate is solved with it dropped (thread_step.cpp): swapped with the band's
+  /// right-hand side, so sized as it (blocks as the band's).
   std::vector<Vec3> whole_update;
   std::array<Vec3, 2> tie_delta{};     ///< The ties' points' velocity change so far (m/s).
   std::vector<std::int32_t> sweep_order;  ///< Self contact: segments sorted along sweep_axis.

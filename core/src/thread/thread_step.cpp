@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "scratch/data_scratch.hpp"
 #include "scratch/thread_scratch.hpp"
@@ -327,26 +328,28 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
     double whole_move = -1.0;  // a growing update from the whole matrix, kept (m)
     for (;;) {
       assemble(iteration, whole);
-      ok = band.solve();
       double largest = 0.0;
-      for (std::size_t i = 0; ok && i < n; ++i) largest = std::max(largest, band.rhs[i + 1].squaredNorm());
+      const bool factored = band.solve();
+      for (std::size_t i = 0; factored && i < n; ++i) largest = std::max(largest, band.rhs[i + 1].squaredNorm());
+      const bool solved = factored && largest < 1e300;  // positive definite, the update finite
       move = h * std::sqrt(largest);
-      if (whole && ok && largest < 1e300 && move >= last_move) {
-        // Growing: from a far start (the dropped part's update grows as well) or from a matrix
-        // near singular (it does not). Kept while the iterate is solved with the part dropped.
-        whole_move = move;
-        for (std::size_t i = 0; i < sc.whole_update.size(); ++i) sc.whole_update[i] = band.rhs[i];
-        whole = false;
-        continue;
-      }
-      if (whole && (!ok || !(largest < 1e300))) {
+      if (whole && !solved) {
         whole = whole_allowed = false;  // not positive definite: not taken
         continue;
       }
-      if (!(largest < 1e300)) ok = false;  // not finite
+      if (whole && move >= last_move) {
+        // Growing: from a far start (the dropped part's update grows as well) or from a matrix
+        // near singular (it does not). Kept (its buffer swapped out, no copy) while the iterate
+        // is solved with the part dropped.
+        whole_move = move;
+        std::swap(sc.whole_update, band.rhs);
+        whole = false;
+        continue;
+      }
+      ok = solved;
       if (ok && whole_move >= 0.0) {
         if (whole_move <= kThreadNewtonWholeRatio * move) {  // the whole matrix's update taken
-          for (std::size_t i = 0; i < sc.whole_update.size(); ++i) band.rhs[i] = sc.whole_update[i];
+          std::swap(sc.whole_update, band.rhs);
           move = whole_move;
         } else {
           whole_allowed = false;
