@@ -149,6 +149,10 @@ TEST(IgtlWorldServer, PlusNamesAreSentAsFromToSceneAndBodiesTheyCannotNameAreRef
   ASSERT_GE(frames, 40u);
   ASSERT_TRUE(igtl_world_test_wait([&] { return body->counters().poses >= frames; }));
   ASSERT_TRUE(igtl_world_test_wait([&] { return target->counters().poses >= frames; }));
+  // A frame sends the body's TRANSFORM, then the target's: the body's client may have counted
+  // its last pose while the last frame's other message is still on its way.
+  ASSERT_TRUE(igtl_world_test_wait([&] { return body->counters().other_devices >= frames; }));
+  ASSERT_TRUE(igtl_world_test_wait([&] { return target->counters().other_devices >= frames; }));
   EXPECT_EQ(body->names_seen(), std::vector<std::string>{"StylusTargetToScene"});
   EXPECT_EQ(target->names_seen(), std::vector<std::string>{"StylusToScene"});
   EXPECT_EQ(body->counters().other_devices, frames);  // the target's, one a frame
