@@ -22,7 +22,7 @@ into a cylinder block of radius RB and height HB (mm), every boundary free but t
 only by an elastic foundation in its volume, a body force -kappa u (reference volume),
 kappa = E_net / l^2, E_net = (15/16) E / (1 - nu^2), l the support length:
   /usr/bin/python3 docs/figures/indentation_reference.py --block 30 30 --support-length 30 \
-      [--nu 0.45] [--law linear|neo] [--net-continuum] [--mesh-scale S] [--out FILE.csv]
+      [--nu 0.45] [--law linear|neo] [--stiffening B] [--net-continuum] [--mesh-scale S] [--out FILE.csv]
 --net-continuum solves the continuum numen's net converges to: E_net and nu = 1/4 in place of E, nu
 (kappa the same). F/E is always over the true E; Hertz alongside with E* = E / (1 - nu^2).
 
@@ -103,7 +103,7 @@ class Indentation:
     L and height H (mm; H = L when not given). kappa None: bottom fixed (the reference table);
     kappa > 0 (E/mm^2): no fixed boundary, an elastic foundation -kappa u in the volume instead."""
 
-    def __init__(self, law, nu, E=1.0, L=400.0, s=1.0, contact="exact", rc=10.0, H=None, kappa=None):
+    def __init__(self, law, nu, E=1.0, L=400.0, s=1.0, contact="exact", rc=10.0, H=None, kappa=None, b=0.0):
         H = L if H is None else H
         self.law, self.nu, self.E, self.L, self.H, self.s, self.kappa = law, nu, E, L, H, s, kappa
         m = self.mesh = graded_mesh(L, s, H=H)
@@ -139,8 +139,12 @@ class Indentation:
             md.add_macro("F2", "Id(2) + G")
             md.add_macro("Ftt", "1 + ur/r")
             md.add_macro("J", "Det(F2)*Ftt")
-            md.add_macro("S", "mu*(F2 - Inv(F2)') + lambda*log(J)*Inv(F2)'")
-            md.add_macro("Stt", "mu*(Ftt - 1/Ftt) + lambda*log(J)/Ftt")
+            # Stiffening b: mu times exp(b Q), Q = I1 - 3 - 2 ln J (b = 0: the law above).
+            md.add_initialized_data("b", b)
+            md.add_macro("Q", "Norm_sqr(F2) + Ftt*Ftt - 3 - 2*log(J)")
+            md.add_macro("mub", "mu*exp(b*Q)")
+            md.add_macro("S", "mub*(F2 - Inv(F2)') + lambda*log(J)*Inv(F2)'")
+            md.add_macro("Stt", "mub*(Ftt - 1/Ftt) + lambda*log(J)/Ftt")
             md.add_nonlinear_term(mim, "r*(S(1,:).Grad_Test_ur + S(2,:).Grad_Test_uz) + Stt*Test_ur")
         else:
             raise ValueError(law)
@@ -283,7 +287,11 @@ def block(args):
     t0 = time.time()
     print(f"block {rb:g} x {hb:g} mm (radius x height), support length {ell:g} mm, kappa = {kappa:.6g} E/mm^2;"
           f" {args.law}, {model}: E_solved = {e_solved:.6g} E, nu_solved = {nu_solved:g}; mesh scale {args.mesh_scale:g}")
-    res = run(args.law, nu_solved, DELTAS, E=e_solved, L=rb, H=hb, s=args.mesh_scale, kappa=kappa)
+    if args.stiffening != 0.0 and args.law != "neo":
+        print("block: --stiffening needs --law neo")
+        return 2
+    res = run(args.law, nu_solved, DELTAS, E=e_solved, L=rb, H=hb, s=args.mesh_scale, kappa=kappa,
+              b=args.stiffening)
     dt = time.time() - t0
     rows = [(d, res[d][0] * e_solved / E, hertz(d, nu)) for d in DELTAS]
     print("  delta_mm   F/E_mm2    Hertz   vs Hertz")
@@ -296,7 +304,8 @@ def block(args):
                       "# E_net = (15/16) E / (1 - nu^2)), static, GetFEM (docs/figures/indentation_reference.py\n"
                       "# --block, docs/indentation-reference.md). Command:\n"
                       f"#   /usr/bin/python3 docs/figures/indentation_reference.py {' '.join(sys.argv[1:])}\n"
-                      f"# block radius {rb:g} mm, height {hb:g} mm, support length l = {ell:g} mm, law {args.law},\n"
+                      f"# block radius {rb:g} mm, height {hb:g} mm, support length l = {ell:g} mm, law {args.law}"
+                      f" (stiffening b = {args.stiffening:g}),\n"
                       f"# model {model}: solved with E_solved = {e_solved:.6g} E, nu_solved = {nu_solved:g}\n"
                       "# (material: the true E, nu; net-continuum: E_net and 1/4, what numen's net converges to).\n"
                       "# force_over_E_mm2 = F/E over the TRUE E, in mm^2: F[N] = E[MPa] * value = E[kPa] * 1e-3 * value.\n"
@@ -310,52 +319,75 @@ def block(args):
     return 0
 
 
-# The law table (--law-table): the neo-Hookean half-space's F / (E* R^2) against delta / R, which
-# numen's tissue contact law reads (core/src/net/neo_hookean_sphere.hpp). Half-space: F / E is
-# R^2 times a function of delta / R and nu alone (no other length), so one R serves every sphere.
+# The law table (--law-table): the half-space's F / (E* R^2) against delta / R, which numen's
+# tissue contact law reads (core/src/net/neo_hookean_sphere.hpp). Half-space: F / E is R^2 times a
+# function of delta / R, nu and the stiffening b alone (no other length), so one R serves every
+# sphere. b = 0 is the neo-Hookean law; b > 0 its exponential (Demiray) stiffening.
+TABLE_BS = (0.0, 0.25, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0)
 TABLE_NUS = (0.2, 0.3, 0.4, 0.45, 0.49)
 TABLE_X = (0.02, 0.04, 0.06, 0.08, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0,
            1.2, 1.4, 1.6, 1.8, 2.0)
 
 
+def table_row(b, nu, s):
+    """g = F / (E* R^2) at TABLE_X for one (b, nu), printed with its ratio to Hertz."""
+    gf.util_trace_level(0)
+    res = run("neo", nu, tuple(x * R for x in TABLE_X), rc=20.0, s=s, b=b)
+    row = [res[x * R][0] * (1.0 - nu * nu) / (R * R) for x in TABLE_X]
+    lines = [f"  b={b:g} nu={nu:g}:  x  g=F/(E* R^2)  Hertz 4/3 x^1.5  ratio"]
+    for x, g in zip(TABLE_X, row):
+        h = 4.0 / 3.0 * x ** 1.5
+        lines.append(f"  {x:4.2f}   {g:11.6f}   {h:11.6f}   {g / h:7.4f}")
+    print("\n".join(lines), flush=True)
+    return row
+
+
 def law_table(args):
-    """Writes the C++ header of the neo-Hookean half-space table: for each nu of TABLE_NUS the
-    dimensionless force g = F / (E* R^2), E* = E / (1 - nu^2), at delta / R = TABLE_X (L = 400 mm,
-    fixed bottom, the exact contact; 80 contact radii: check 4's 0.4 %)."""
+    """Writes the C++ header of the half-space table: for each b of TABLE_BS and nu of TABLE_NUS
+    the dimensionless force g = F / (E* R^2), E* = E / (1 - nu^2), at delta / R = TABLE_X
+    (L = 400 mm, fixed bottom, the exact contact; 80 contact radii: check 4's 0.4 %), the rows
+    solved by --jobs processes."""
+    from concurrent.futures import ProcessPoolExecutor
     t0 = time.time()
-    nus = TABLE_NUS if args.table_nu is None else (args.table_nu,)
-    rows = {}
-    for nu in nus:
-        res = run("neo", nu, tuple(x * R for x in TABLE_X), rc=20.0, s=args.mesh_scale)
-        rows[nu] = [res[x * R][0] * (1.0 - nu * nu) / (R * R) for x in TABLE_X]
-        print("  x      g=F/(E* R^2)  Hertz 4/3 x^1.5   ratio")
-        for x, g in zip(TABLE_X, rows[nu]):
-            h = 4.0 / 3.0 * x ** 1.5
-            print(f"  {x:4.2f}   {g:11.6f}   {h:11.6f}   {g / h:7.4f}", flush=True)
     if args.table_nu is not None:
+        table_row(args.stiffening, args.table_nu, args.mesh_scale)
         return 0
+    keys = [(b, nu) for b in TABLE_BS for nu in TABLE_NUS]
+    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        futures = {k: pool.submit(table_row, k[0], k[1], args.mesh_scale) for k in keys}
+        rows = {k: f.result() for k, f in futures.items()}
     with open(args.law_table, "w") as out:
         out.write("#pragma once\n"
                   "/// @file neo_hookean_sphere.hpp\n"
                   "/// GENERATED by docs/figures/indentation_reference.py --law-table (GetFEM, docs/indentation-reference.md,\n"
                   "/// \"The law table\"); do not edit. A rigid frictionless sphere of radius R pressed delta into a\n"
-                  "/// compressible neo-Hookean half-space (W = mu/2 (I1 - 3) - mu ln J + lambda/2 (ln J)^2; a cylinder of\n"
-                  f"/// 400 mm = {400.0 / R:g} R, fixed bottom), statically, exact contact kinematics, frictionless:\n"
-                  "/// g = F / (E* R^2), E* = E / (1 - nu^2), at x = delta / R, for each nu. Hertz is g = 4/3 x^1.5.\n"
+                  "/// compressible neo-Hookean half-space with exponential (Demiray) stiffening b,\n"
+                  "/// W = mu/(2b) (exp(b Q) - 1) + lambda/2 (ln J)^2, Q = I1 - 3 - 2 ln J (b = 0: W = mu/2 Q + lambda/2 (ln J)^2,\n"
+                  f"/// the compressible neo-Hookean law), a cylinder of 400 mm = {400.0 / R:g} R, fixed bottom; statically, exact\n"
+                  "/// contact kinematics, frictionless: g = F / (E* R^2), E* = E / (1 - nu^2), at x = delta / R, for each b and\n"
+                  "/// nu. Hertz is g = 4/3 x^1.5.\n"
                   "\n"
                   "namespace numen::core::detail {\n\n"
-                  f"inline constexpr int kNeoHookeanSphereNus = {len(nus)};\n"
+                  f"inline constexpr int kNeoHookeanSphereStiffenings = {len(TABLE_BS)};\n"
+                  f"inline constexpr int kNeoHookeanSphereNus = {len(TABLE_NUS)};\n"
                   f"inline constexpr int kNeoHookeanSpherePoints = {len(TABLE_X)};\n"
+                  "/// Stiffenings b of the blocks, increasing from 0.\n"
+                  "inline constexpr double kNeoHookeanSphereB[kNeoHookeanSphereStiffenings] = {"
+                  + ", ".join(f"{b:g}" for b in TABLE_BS) + "};\n"
                   "/// Poisson's ratios of the rows, increasing.\n"
                   "inline constexpr double kNeoHookeanSphereNu[kNeoHookeanSphereNus] = {"
-                  + ", ".join(f"{nu:g}" for nu in nus) + "};\n"
+                  + ", ".join(f"{nu:g}" for nu in TABLE_NUS) + "};\n"
                   "/// x = delta / R of the columns, increasing.\n"
                   "inline constexpr double kNeoHookeanSphereX[kNeoHookeanSpherePoints] = {"
                   + ", ".join(f"{x:g}" for x in TABLE_X) + "};\n"
-                  "/// g = F / (E* R^2) [nu][x].\n"
-                  "inline constexpr double kNeoHookeanSphereG[kNeoHookeanSphereNus][kNeoHookeanSpherePoints] = {\n")
-        for nu in nus:
-            out.write("    {" + ", ".join(f"{g:.7g}" for g in rows[nu]) + "},\n")
+                  "/// g = F / (E* R^2) [b][nu][x].\n"
+                  "inline constexpr double kNeoHookeanSphereG[kNeoHookeanSphereStiffenings][kNeoHookeanSphereNus]"
+                  "[kNeoHookeanSpherePoints] = {\n")
+        for b in TABLE_BS:
+            out.write("  {\n")
+            for nu in TABLE_NUS:
+                out.write("    {" + ", ".join(f"{g:.7g}" for g in rows[(b, nu)]) + "},\n")
+            out.write("  },\n")
         out.write("};\n\n}  // namespace numen::core::detail\n")
     print(f"wrote {args.law_table} in {time.time() - t0:.1f} s")
     return 0
@@ -396,6 +428,9 @@ def main():
     tab = ap.add_argument_group("law table (numen's tissue contact law)")
     tab.add_argument("--law-table", metavar="HEADER", help="write the neo-Hookean half-space table as a C++ header")
     tab.add_argument("--table-nu", type=float, help="solve and print one nu's row only (writes nothing)")
+    tab.add_argument("--stiffening", type=float, default=0.0,
+                     help="the neo-Hookean law's stiffening b (0), for --table-nu and --block")
+    tab.add_argument("--jobs", type=int, default=2, help="processes solving the table's rows (2)")
     args = ap.parse_args()
     if args.block is None and (args.support_length is not None or args.net_continuum or args.out):
         ap.error("--support-length, --net-continuum and --out need --block")

@@ -1,16 +1,18 @@
 #!/usr/bin/env python3
-"""The default scene with its organ given by a material (docs/tissue.md, "The shipped organ with a
-material"): writes a copy of sim/scenes/default.toml beside it whose [[deformable]] "organ" takes
-youngs_modulus_kpa, poisson_ratio, density, rayleigh_stiffness and support_length in place of its
-per-spring constants, runs it and the default scene with `numen run --json`, and prints the figures
-side by side. The copy is removed afterwards.
+"""The default scene's organ given by its material against the per-spring organ it replaced
+(docs/tissue.md, "The shipped organ keeps its feel" and "Cost"): runs sim/scenes/default.toml (its
+organ given by its material) and a copy of it whose [[deformable]] "organ" takes the per-spring
+constants the scene shipped before issue 67 (the mesh as its own 1 002-node net) in place of the
+material, both with `numen run --json`, and prints the figures side by side. The copies are
+written beside default.toml and removed afterwards.
 
     python3 docs/figures/tissue_default_run.py [--numen build/numen] [--duration 10]
-        [--youngs-modulus-kpa 120] [--poisson-ratio 0.45] [--density 1000]
-        [--rayleigh-stiffness 0.001] [--support-length 0.02] [--nodes N]
+        [--youngs-modulus-kpa E] [--poisson-ratio NU] [--density RHO]
+        [--rayleigh-stiffness BETA] [--support-length L] [--strain-stiffening B] [--nodes N]
 
---nodes N gives the material organ a net of N surface nodes simplified from the organ's mesh
-(the `nodes` key; without it the mesh's own 1 002 vertices are the surface net).
+A material option, or --nodes, runs the material organ with that key changed (a copy of
+default.toml); --nodes 0 takes the mesh's own 1 002 vertices as the net (no `nodes` key).
+Exits 1 if either run's exit status is not 0.
 """
 import argparse
 import json
@@ -22,40 +24,41 @@ import tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENES = os.path.join(ROOT, "sim", "scenes")
-SPRING_KEYS = ("mass", "stiffness", "damping", "bending_stiffness", "bending_damping",
-               "tie_stiffness", "tie_damping")
+MATERIAL_KEYS = ("youngs_modulus_kpa", "poisson_ratio", "density", "rayleigh_stiffness",
+                 "support_length", "strain_stiffening", "load_patch_radius", "nodes")
+# sim/scenes/default.toml's organ before issue 67 (docs/organs.md, "Organs").
+PER_SPRING = {"mass": 0.07, "stiffness": 200.0, "damping": 0.1, "bending_stiffness": 50.0,
+              "bending_damping": 0.03, "tie_stiffness": 100.0, "tie_damping": 0.17}
 FIGURES = ("step_time_median_us", "step_time_p99_us", "solver_iterations_mean",
            "feedback_force_max_n", "feedback_force_jump_max_n", "tool_penetration_max_mm",
            "net_penetration_max_mm", "net_tie_stretch_max_mm", "exit_status")
 
 
-def material_scene(text, material, nodes=None):
-    """default.toml's text with the organ's per-spring keys replaced by `material`'s (and its
-    net's surface node count `nodes`, when given)."""
+def organ_scene(text, drop, add):
+    """default.toml's text with the organ's keys in `drop` removed and those of `add` appended."""
     start = text.index('[[deformable]]\nname = "organ"')
     end = text.index("\n[", start + 1)
-    table = text[start:end]
-    lines = [l for l in table.split("\n")
-             if not any(re.match(r"\s*%s\s*=" % k, l) for k in SPRING_KEYS)]
-    lines += ["%s = %r" % kv for kv in material.items()]
-    if nodes is not None:
-        lines.append("nodes = %d" % nodes)
+    lines = [l for l in text[start:end].split("\n")
+             if not any(re.match(r"\s*%s\s*=" % k, l) for k in drop)]
+    lines += ["%s = %r" % kv for kv in add.items()]
     return text[:start] + "\n".join(lines) + "\n" + text[end:]
 
 
 def run(numen, scene, duration):
     out = subprocess.run([numen, "run", scene, "--duration", str(duration), "--json"],
                          capture_output=True, text=True)
-    if out.returncode not in (0,):
+    if out.returncode != 0:
         sys.stderr.write(out.stderr)
-    summary = json.loads(out.stdout)
-    return summary
+    try:
+        return json.loads(out.stdout)
+    except json.JSONDecodeError:
+        sys.stderr.write("%s: no JSON summary (exit status %d)\n" % (scene, out.returncode))
+        return {"exit_status": out.returncode}
 
 
 def figure(summary, key):
-    for k in (key,):
-        if k in summary:
-            return summary[k]
+    if key in summary:
+        return summary[key]
     step = summary.get("step_time_us", {})
     return {"step_time_median_us": step.get("median"), "step_time_p99_us": step.get("p99")}.get(key)
 
@@ -64,31 +67,30 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--numen", default=os.path.join(ROOT, "build", "numen"))
     p.add_argument("--duration", type=float, default=10.0)
-    p.add_argument("--youngs-modulus-kpa", type=float, default=120.0)
-    p.add_argument("--poisson-ratio", type=float, default=0.45)
-    p.add_argument("--density", type=float, default=1000.0)
-    p.add_argument("--rayleigh-stiffness", type=float, default=0.001)
-    p.add_argument("--support-length", type=float, default=0.02)
-    p.add_argument("--nodes", type=int, default=None)
+    for key in MATERIAL_KEYS:
+        p.add_argument("--" + key.replace("_", "-"), type=int if key == "nodes" else float, default=None)
     a = p.parse_args()
-    material = {"youngs_modulus_kpa": a.youngs_modulus_kpa, "poisson_ratio": a.poisson_ratio,
-                "density": a.density, "rayleigh_stiffness": a.rayleigh_stiffness,
-                "support_length": a.support_length}
+    changed = {k: getattr(a, k) for k in MATERIAL_KEYS if getattr(a, k) is not None}
     default = os.path.join(SCENES, "default.toml")
     with open(default) as f:
-        text = material_scene(f.read(), material, a.nodes)
-    fd, path = tempfile.mkstemp(prefix=".tissue-", suffix=".toml", dir=SCENES)
+        text = f.read()
+    scenes = {"spring": organ_scene(text, MATERIAL_KEYS, PER_SPRING)}
+    if changed:
+        add = {k: v for k, v in changed.items() if not (k == "nodes" and v == 0)}
+        scenes["tissue"] = organ_scene(text, changed.keys(), add)
+    paths = {}
     try:
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        spring = run(a.numen, default, a.duration)
-        tissue = run(a.numen, path, a.duration)
+        for name, body in scenes.items():
+            fd, paths[name] = tempfile.mkstemp(prefix=".tissue-", suffix=".toml", dir=SCENES)
+            with os.fdopen(fd, "w") as f:
+                f.write(body)
+        spring = run(a.numen, paths["spring"], a.duration)
+        tissue = run(a.numen, paths.get("tissue", default), a.duration)
     finally:
-        os.unlink(path)
-    label = ", ".join("%s %g" % kv for kv in material.items())
-    if a.nodes is not None:
-        label += ", nodes %d" % a.nodes
-    print("| figure | per-spring organ (default.toml) | organ with material %s |" % label)
+        for path in paths.values():
+            os.unlink(path)
+    label = "default.toml" + ("".join(", %s %g" % kv for kv in changed.items()) if changed else "")
+    print("| figure | per-spring organ | organ with its material (%s) |" % label)
     print("| --- | --- | --- |")
     for key in FIGURES:
         fmt = lambda v: "%.3f" % v if isinstance(v, float) else str(v)

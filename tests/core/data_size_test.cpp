@@ -12,6 +12,8 @@
 #include "lean_scenes.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_material.hpp"
+#include "octahedron_net.hpp"
 #include "thread_scenes.hpp"
 
 namespace core = numen::core;
@@ -68,6 +70,25 @@ TEST(DataSize, FootprintCoversTheNetsBuffers) {
   // NetScratch::resize() sorts the springs with a temporary array: make_data()
   // asks for exactly that array (num_nodes ints) more than it keeps.
   const core::Model m = make_lean_model(LeanPart::kNet);
+  core::DataFootprint f;
+  const std::int64_t bytes = make_data_bytes(m, f);
+  const std::size_t temporary = static_cast<std::size_t>(m.num_nodes()) * sizeof(std::int32_t);
+  EXPECT_EQ(static_cast<std::size_t>(bytes), f.heap_bytes() + temporary);
+}
+
+// A net given by its material has the tissue contact's load patch buffers besides (NetScratch::
+// patch_nodes, patch_weights): counted too. A regular octahedron with a node at its centre
+// (tests/support/octahedron_net.hpp).
+TEST(DataSize, FootprintCoversAMaterialNetsLoadPatch) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  std::string err;
+  core::Model m =
+      numen::test::octahedron_material_model(core::NetMaterial{10e3, 0.45, 1000.0, 1e-3, 0.03, 0.0}, nullptr, &err);
+  ASSERT_EQ(err, "");
+  m.material_names = {"tissue"};
+  m.material_pairs.assign(1, core::MaterialPair{2e4, 10.0, 0.0});
+  m.initial_held_body = -1;  // the organ alone: no device
+  ASSERT_EQ(core::finalize_model(m), "");
   core::DataFootprint f;
   const std::int64_t bytes = make_data_bytes(m, f);
   const std::size_t temporary = static_cast<std::size_t>(m.num_nodes()) * sizeof(std::int32_t);

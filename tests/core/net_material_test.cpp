@@ -16,24 +16,15 @@
 #include "numen/core/model.hpp"
 #include "numen/core/net_material.hpp"
 #include "numen/core/step.hpp"
+#include "octahedron_net.hpp"
 
 namespace core = numen::core;
 using core::Vec3;
 
 namespace {
 
-/// A regular octahedron of half-diagonal `r` (m) with a node at its centre: 6 surface nodes,
-/// 8 faces wound outward, 8 tetrahedra (each face and the centre, node 6).
-core::TetrahedralMesh octahedron(double r) {
-  core::TetrahedralMesh m;
-  m.surface.vertices = {Vec3(r, 0, 0), Vec3(-r, 0, 0), Vec3(0, r, 0),
-                        Vec3(0, -r, 0), Vec3(0, 0, r), Vec3(0, 0, -r)};
-  m.surface.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
-                         {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-  m.interior = {Vec3::Zero()};
-  for (const auto& f : m.surface.triangles) m.tetrahedra.push_back({f[0], f[1], f[2], 6});
-  return m;
-}
+/// The octahedron of tests/support/octahedron_net.hpp.
+core::TetrahedralMesh octahedron(double r) { return numen::test::octahedron_volume(r); }
 
 core::NetMaterial liver() {
   core::NetMaterial t;
@@ -42,25 +33,14 @@ core::NetMaterial liver() {
   t.density = 1060.0;
   t.rayleigh_stiffness = 2e-3;
   t.support_length = 0.03;
+  t.strain_stiffening = 1.0;
   return t;
 }
 
 /// A model with one anchored rigid component and the octahedron's material net.
 core::Model octahedron_model(const core::NetMaterial& tissue, core::MaterialNetConstants* c,
                              std::string* err) {
-  core::Model m;
-  core::BodyModel anchor;
-  anchor.name = "core";
-  anchor.mass = 0.1;
-  anchor.inertia_body = 1e-4 * core::Mat3::Identity();
-  anchor.anchored = true;
-  m.bodies = {anchor};
-  core::MaterialNetSettings s;
-  s.name = "organ";
-  s.body = 0;
-  s.tissue = tissue;
-  *err = core::add_material_net(m, octahedron(0.01), s, c);
-  return m;
+  return numen::test::octahedron_material_model(tissue, c, err);
 }
 
 }  // namespace
@@ -99,6 +79,7 @@ TEST(NetMaterial, EveryConstantFollowsFromTheMaterialAndTheTetrahedra) {
   // twice the edge of a 500-node net of the surface.
   EXPECT_NEAR(net.contact_modulus, t.youngs_modulus / (1.0 - t.poisson_ratio * t.poisson_ratio), 1e-9);
   EXPECT_EQ(net.contact_poisson_ratio, t.poisson_ratio);
+  EXPECT_EQ(net.contact_stiffening, t.strain_stiffening);
   const double face = std::sqrt(3.0) / 4.0 * 2.0 * r * r;
   ASSERT_EQ(net.surface_node_area.size(), 6u);
   ASSERT_EQ(net.surface_node_normal.size(), 6u);
@@ -155,6 +136,9 @@ TEST(NetMaterial, ABadMaterialIsRefusedAtItsSceneKeyAndTheModelIsLeftAsItWas) {
       {[](core::NetMaterial& t) { t.density = 0.0; }, "density"},
       {[](core::NetMaterial& t) { t.rayleigh_stiffness = -1e-3; }, "rayleigh_stiffness"},
       {[](core::NetMaterial& t) { t.support_length = 0.0; }, "support_length"},
+      {[](core::NetMaterial& t) { t.strain_stiffening = -0.1; }, "strain_stiffening"},
+      {[](core::NetMaterial& t) { t.strain_stiffening = 4.1; }, "strain_stiffening"},
+      {[](core::NetMaterial& t) { t.strain_stiffening = NAN; }, "strain_stiffening"},
   };
   for (const Case& k : cases) {
     core::NetMaterial t = liver();
@@ -235,6 +219,11 @@ TEST(NetMaterial, FinalizeRefusesAnInconsistentTissueNet) {
     core::Model m = good;
     m.nets[0].contact_poisson_ratio = 0.5;
     EXPECT_NE(core::finalize_model(m).find("contact_poisson_ratio in (-1, 0.5)"), std::string::npos);
+  }
+  {
+    core::Model m = good;
+    m.nets[0].contact_stiffening = 5.0;
+    EXPECT_NE(core::finalize_model(m).find("contact_stiffening in [0, 4]"), std::string::npos);
   }
   {
     core::Model m = good;

@@ -30,7 +30,7 @@ double hertz(double depth) { return 4.0 / 3.0 * kModulus * std::sqrt(kRadius) * 
 // Without a patch to share the approach with (ρ → ∞: c_ρ → 0), the law is the neo-Hookean
 // half-space's: Hertz's within 2 % for δ ≤ 0.1 R, the table's below it deeper (14 % at δ = R).
 TEST(TissueContactLaw, WithAnUnboundedPatchItIsTheHalfSpacesNearHertzWhenShallow) {
-  const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, kRadius, 1e9, kPenalty);
+  const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, 0.0, kRadius, 1e9, kPenalty);
   for (const double d : {1e-6, 1e-5, 5e-5, 1e-4, 2.5e-4})
     EXPECT_NEAR(tissue_contact_force(law, d).force, hertz(d), 0.02 * hertz(d)) << d;
   const double at_r = tissue_contact_force(law, kRadius).force;
@@ -38,35 +38,66 @@ TEST(TissueContactLaw, WithAnUnboundedPatchItIsTheHalfSpacesNearHertzWhenShallow
   EXPECT_GT(at_r, 0.8 * hertz(kRadius));
 }
 
-// At a row's ν the law's g is the table's at every knot; between rows it lies between them.
-TEST(TissueContactLaw, TheHalfSpaceIsTheTablesAtItsKnotsAndRows) {
-  for (int j = 0; j < table::kNeoHookeanSphereNus; ++j) {
-    const TissueContactLaw law =
-        make_tissue_contact_law(kModulus, table::kNeoHookeanSphereNu[j], kRadius, 0.009, kPenalty);
-    for (int i = 0; i < table::kNeoHookeanSpherePoints; ++i)
-      EXPECT_NEAR(tissue_half_space(law, table::kNeoHookeanSphereX[i]).g, table::kNeoHookeanSphereG[j][i],
-                  1e-12 * table::kNeoHookeanSphereG[j][i])
-          << j << " " << i;
-  }
+// At a block's b and a row's ν the law's g is the table's at every knot; between rows and
+// blocks it is linear in each.
+TEST(TissueContactLaw, TheHalfSpaceIsTheTablesAtItsKnotsRowsAndBlocks) {
+  for (int k = 0; k < table::kNeoHookeanSphereStiffenings; ++k)
+    for (int j = 0; j < table::kNeoHookeanSphereNus; ++j) {
+      const TissueContactLaw law = make_tissue_contact_law(
+          kModulus, table::kNeoHookeanSphereNu[j], table::kNeoHookeanSphereB[k], kRadius, 0.009, kPenalty);
+      for (int i = 0; i < table::kNeoHookeanSpherePoints; ++i)
+        EXPECT_NEAR(tissue_half_space(law, table::kNeoHookeanSphereX[i]).g, table::kNeoHookeanSphereG[k][j][i],
+                    1e-12 * table::kNeoHookeanSphereG[k][j][i])
+            << k << " " << j << " " << i;
+    }
   const double lo = table::kNeoHookeanSphereNu[3], hi = table::kNeoHookeanSphereNu[4];
-  const TissueContactLaw mid = make_tissue_contact_law(kModulus, 0.5 * (lo + hi), kRadius, 0.009, kPenalty);
+  const double b0 = table::kNeoHookeanSphereB[2], b1 = table::kNeoHookeanSphereB[3];
+  const TissueContactLaw mid =
+      make_tissue_contact_law(kModulus, 0.5 * (lo + hi), 0.25 * b0 + 0.75 * b1, kRadius, 0.009, kPenalty);
   for (int i = 0; i < table::kNeoHookeanSpherePoints; ++i) {
     const double g = tissue_half_space(mid, table::kNeoHookeanSphereX[i]).g;
-    EXPECT_NEAR(g, 0.5 * (table::kNeoHookeanSphereG[3][i] + table::kNeoHookeanSphereG[4][i]), 1e-12 * g);
+    const auto& t = table::kNeoHookeanSphereG;
+    EXPECT_NEAR(g, 0.125 * (t[2][3][i] + t[2][4][i]) + 0.375 * (t[3][3][i] + t[3][4][i]), 1e-12 * g);
   }
-  // The rows' span, and a ν outside it takes the nearest row.
+  // The rows' span, and a ν outside it takes the nearest row; a b past the last block takes it.
   EXPECT_EQ(numen::core::tissue_law_poisson_range().min, table::kNeoHookeanSphereNu[0]);
   EXPECT_EQ(numen::core::tissue_law_poisson_range().max,
             table::kNeoHookeanSphereNu[table::kNeoHookeanSphereNus - 1]);
-  const TissueContactLaw below = make_tissue_contact_law(kModulus, -0.5, kRadius, 0.009, kPenalty);
+  const TissueContactLaw below = make_tissue_contact_law(kModulus, -0.5, 0.0, kRadius, 0.009, kPenalty);
   const double first = table::kNeoHookeanSphereNu[0];
   EXPECT_DOUBLE_EQ(tissue_half_space(below, 1.0).g,
-                   tissue_half_space(make_tissue_contact_law(kModulus, first, kRadius, 0.009, kPenalty), 1.0).g);
+                   tissue_half_space(make_tissue_contact_law(kModulus, first, 0.0, kRadius, 0.009, kPenalty), 1.0).g);
+  EXPECT_DOUBLE_EQ(
+      tissue_half_space(make_tissue_contact_law(kModulus, kNu, 9.0, kRadius, 0.009, kPenalty), 1.0).g,
+      tissue_half_space(make_tissue_contact_law(kModulus, kNu, numen::core::kMaxStrainStiffening, kRadius,
+                                                0.009, kPenalty), 1.0).g);
+}
+
+// Strain stiffening leaves the small-indentation response (Hertz's) and stiffens the deep one
+// monotonically: at δ = 2 R the neo-Hookean half-space (b = 0) is 31 % below Hertz, b = 1 about
+// Hertz's, b = 4 38 % above (ν = 0.45, the GetFEM solves of docs/indentation-reference.md).
+TEST(TissueContactLaw, StrainStiffeningStiffensTheDeepResponseAndLeavesTheShallowOne) {
+  double last_deep = 0.0;
+  for (const double b : {0.0, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0, 4.0}) {
+    const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, b, kRadius, 1e9, kPenalty);
+    const double shallow = tissue_contact_force(law, 0.02 * kRadius).force;
+    EXPECT_NEAR(shallow, hertz(0.02 * kRadius), 0.01 * hertz(0.02 * kRadius)) << b;
+    const double deep = tissue_contact_force(law, 2.0 * kRadius).force;
+    EXPECT_GT(deep, last_deep) << b;
+    last_deep = deep;
+    if (b == 0.0) {
+      EXPECT_NEAR(deep / hertz(2.0 * kRadius), 0.69, 0.02);
+    } else if (b == 1.0) {
+      EXPECT_NEAR(deep / hertz(2.0 * kRadius), 0.99, 0.02);
+    } else if (b == 4.0) {
+      EXPECT_NEAR(deep / hertz(2.0 * kRadius), 1.38, 0.02);
+    }
+  }
 }
 
 // g is C¹ and increasing over the table and past it (the linear continuation), its slope dg/dx.
 TEST(TissueContactLaw, TheHalfSpaceIsC1AndIncreasing) {
-  const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, kRadius, 0.009, kPenalty);
+  const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, 0.0, kRadius, 0.009, kPenalty);
   double last = 0.0;
   for (double x = 0.001; x < 4.0; x *= 1.07) {
     const auto h = tissue_half_space(law, x);
@@ -86,7 +117,7 @@ TEST(TissueContactLaw, TheHalfSpaceIsC1AndIncreasing) {
 
 // F(d) inverts d(F), rises with d, and its stiffness is dF/dd.
 TEST(TissueContactLaw, TheForceInvertsTheDepthAndIsC1) {
-  const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, kRadius, 0.009, kPenalty);
+  const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, 0.0, kRadius, 0.009, kPenalty);
   EXPECT_GT(law.patch, 0.0);
   double last = 0.0;
   for (double f = 0.01; f < 8.0; f *= 1.3) {
@@ -106,7 +137,7 @@ TEST(TissueContactLaw, TheForceInvertsTheDepthAndIsC1) {
 // A patch too small for the sphere: the law turns linear with the pair's penalty stiffness where
 // its own slope reaches it (C¹).
 TEST(TissueContactLaw, APatchTooSmallForTheSphereTurnsToThePenalty) {
-  const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, kRadius, 0.002, kPenalty);
+  const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, 0.0, kRadius, 0.002, kPenalty);
   ASSERT_TRUE(std::isfinite(law.switch_depth));
   const auto at = tissue_contact_force(law, law.switch_depth - 1e-12);
   EXPECT_NEAR(at.stiffness, kPenalty, 1e-3 * kPenalty);
@@ -114,7 +145,7 @@ TEST(TissueContactLaw, APatchTooSmallForTheSphereTurnsToThePenalty) {
   EXPECT_NEAR(past.force, law.switch_force + kPenalty * 1e-4, 1e-9);
   EXPECT_EQ(past.stiffness, kPenalty);
   // A patch large for the sphere never switches.
-  EXPECT_FALSE(std::isfinite(make_tissue_contact_law(kModulus, kNu, kRadius, 0.009, kPenalty).switch_depth));
+  EXPECT_FALSE(std::isfinite(make_tissue_contact_law(kModulus, kNu, 0.0, kRadius, 0.009, kPenalty).switch_depth));
 }
 
 // The touched point's blend (kTissueTouchDepthScale): a face contact's K(τ) is 0 where its point
@@ -148,7 +179,7 @@ TEST(TissueContactLaw, AllocatesNothing) {
   numen::test::AllocationGuard guard;
   double sum = 0.0;
   for (int i = 1; i <= 1000; ++i) {
-    const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, kRadius, 0.009, kPenalty);
+    const TissueContactLaw law = make_tissue_contact_law(kModulus, kNu, 0.0, kRadius, 0.009, kPenalty);
     sum += tissue_contact_force(law, 1e-5 * i).force;
   }
   EXPECT_EQ(guard.count(), 0);

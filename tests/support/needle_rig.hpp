@@ -39,6 +39,24 @@ inline core::Pose puncture_needle_pose(const core::NeedleModel& n, const core::V
   return core::Pose{c - q * n.centre, q};
 }
 
+/// Adds the rigs' needle to `m` (body 1 after the tissue's core): the 26 mm half circle of
+/// `threshold` and `max_angle`, its circle's centre C = (0, 0, ±R/2) and its tip at β (rad),
+/// held by the device as the god-object (coupling 500 N/m and 0.05 N·m/rad, ζ 0.85).
+inline void hold_rig_needle(core::Model& m, double threshold, double max_angle, double centre_z_sign, double beta_tip) {
+  core::NeedleSpec spec;
+  spec.name = "needle";
+  spec.puncture_force = threshold;
+  spec.puncture_max_angle = max_angle;
+  core::add_needle(m, spec);
+  const core::NeedleModel& n = m.needles[0];
+  m.bodies[1].initial_pose = puncture_needle_pose(n, core::Vec3(0, 0, centre_z_sign * n.radius / 2), beta_tip);
+  const double mass = m.bodies[1].mass, inertia = m.bodies[1].inertia_body(2, 2);
+  m.bodies[1].coupling = core::CouplingGains{500.0, core::damping_from_ratio(0.85, mass, 500.0), 0.05,
+                                             core::damping_from_ratio(0.85, inertia, 0.05)};
+  m.feedback = core::FeedbackGains{500.0, m.bodies[1].coupling.gamma_t, 0.05, m.bodies[1].coupling.gamma_r};
+  m.initial_held_body = 1;
+}
+
 /// Body 0 the patch's anchored core; the patch (14 × 14 cells of 2 mm in z = 0, normals +z, the
 /// shipped organ's constants); body 1 the needle (26 mm half circle, 0.35 mm wire, 78 mg), its
 /// circle's centre C = (0, 0, R/2) (so that its arc meets the patch 60° either side of straight
@@ -52,22 +70,23 @@ inline core::Model puncture_rig(double threshold = kPunctureThreshold, double ma
   core::Model m = organ::patch_rig_start();
   const core::TriangleMesh patch = organ::flat_patch(14, 0.002);
   EXPECT_EQ(core::add_net(m, patch, organ::organ_net_settings(patch, {})), "");
-  core::NeedleSpec spec;
-  spec.name = "needle";
-  spec.puncture_force = threshold;
-  spec.puncture_max_angle = max_angle;
-  core::add_needle(m, spec);
-  core::NeedleModel& n = m.needles[0];
-  m.bodies[1].initial_pose = below ? puncture_needle_pose(n, core::Vec3(0, 0, -n.radius / 2), 190 * kPunctureDeg)
-                                  : puncture_needle_pose(n, core::Vec3(0, 0, n.radius / 2), -10 * kPunctureDeg);
-  const double mass = m.bodies[1].mass, inertia = m.bodies[1].inertia_body(2, 2);
-  m.bodies[1].coupling = core::CouplingGains{500.0, core::damping_from_ratio(0.85, mass, 500.0), 0.05,
-                                             core::damping_from_ratio(0.85, inertia, 0.05)};
-  m.feedback = core::FeedbackGains{500.0, m.bodies[1].coupling.gamma_t, 0.05, m.bodies[1].coupling.gamma_r};
-  m.initial_held_body = 1;
+  hold_rig_needle(m, threshold, max_angle, below ? -1.0 : 1.0, (below ? 190 : -10) * kPunctureDeg);
   if (finalize) {
     EXPECT_EQ(core::finalize_model(m), "");
   }
+  return m;
+}
+
+/// puncture_rig() with a box of tissue in place of the patch: 28 × 20 × 8 mm in cells of 2 mm
+/// (2.67 mm on its sides, as the suturing pad's), per spring with the patch's constants, its
+/// top at z = 0 and its +y side `edge` (m) from the needle's plane y = 0.
+inline core::Model puncture_rig_box(double edge) {
+  core::Model m = organ::patch_rig_start();
+  core::TriangleMesh box = core::make_box(core::Vec3(0.014, 0.010, 0.004), {14, 10, 3});
+  for (core::Vec3& v : box.vertices) v += core::Vec3(0.0, edge - 0.010, -0.004);
+  EXPECT_EQ(core::add_net(m, box, organ::organ_net_settings(box, {})), "");
+  hold_rig_needle(m, kPunctureThreshold, 60 * kPunctureDeg, 1.0, -10 * kPunctureDeg);
+  EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
 
@@ -159,17 +178,7 @@ inline core::Model puncture_rig_material(double threshold = kPunctureThreshold) 
   s.tissue.rayleigh_stiffness = 1e-3;
   s.tissue.support_length = 0.008;
   EXPECT_EQ(core::add_material_net(m, material_slab(7, 4, 0.002), s), "");
-  core::NeedleSpec spec;
-  spec.name = "needle";
-  spec.puncture_force = threshold;
-  core::add_needle(m, spec);
-  core::NeedleModel& n = m.needles[0];
-  m.bodies[1].initial_pose = puncture_needle_pose(n, core::Vec3(0, 0, n.radius / 2), -10 * kPunctureDeg);
-  const double mass = m.bodies[1].mass, inertia = m.bodies[1].inertia_body(2, 2);
-  m.bodies[1].coupling = core::CouplingGains{500.0, core::damping_from_ratio(0.85, mass, 500.0), 0.05,
-                                             core::damping_from_ratio(0.85, inertia, 0.05)};
-  m.feedback = core::FeedbackGains{500.0, m.bodies[1].coupling.gamma_t, 0.05, m.bodies[1].coupling.gamma_r};
-  m.initial_held_body = 1;
+  hold_rig_needle(m, threshold, core::NeedleSpec{}.puncture_max_angle, 1.0, -10 * kPunctureDeg);
   EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }

@@ -77,7 +77,8 @@ DataFootprint data_footprint(const Data& d) noexcept {
            n.surface_point_stamp, n.surface_position, n.surface_net_stamp, n.surface_net_torn,
            n.rest_count, n.rest_flags, n.pass_position,
            n.pass_velocity, n.still_flags, n.still_force, n.still_energy, n.active_nodes,
-           n.active_positions, n.pass_positions, n.active_count, n.pass_count)};
+           n.active_positions, n.pass_positions, n.active_count, n.pass_count, n.patch_nodes,
+           n.patch_weights)};
   std::size_t threads = heap(d.needles, d.threads, scratch.threads);
   for (const ThreadState& t : d.threads) threads += heap(t.position, t.velocity, t.external_force);
   for (const ThreadScratch& t : scratch.threads)

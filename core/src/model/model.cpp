@@ -11,6 +11,7 @@
 #include "numen/core/collision.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/net_model.hpp"
+#include "numen/core/net_tissue_contact.hpp"
 #include "numen/core/step_stages.hpp"
 
 namespace numen::core {
@@ -65,12 +66,14 @@ std::string validate_nets(const Model& model) {
     if (!(net.load_patch_radius >= 0.0 && std::isfinite(net.load_patch_radius)) ||
         !(net.contact_modulus >= 0.0 && std::isfinite(net.contact_modulus)) ||
         !(net.contact_poisson_ratio > -1.0 && net.contact_poisson_ratio < 0.5) ||
+        !(net.contact_stiffening >= 0.0 && net.contact_stiffening <= kMaxStrainStiffening) ||
         (net.contact_modulus > 0.0 &&
          (!(net.load_patch_radius > 0.0) ||
           static_cast<int>(net.surface_node_area.size()) > net.node_count ||
           net.surface_node_normal.size() != net.surface_node_area.size())))
       return who + ": contact_modulus needs load_patch_radius > 0 and at most node_count surface "
-                   "areas, one normal each; contact_poisson_ratio in (-1, 0.5)";
+                   "areas, one normal each; contact_poisson_ratio in (-1, 0.5); contact_stiffening in "
+                   "[0, 4]";
     if (net.face_begin != next_face || net.face_count < 0)
       return who + ": face range must follow the previous net's";
     next_node += net.node_count;

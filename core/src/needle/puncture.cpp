@@ -44,9 +44,10 @@ Vec3 face_normal(const Model& model, const Data& data, int face) noexcept {
 }
 
 /// Whether the segment a → b crosses net triangle `face` (Möller & Trumbore 1997, "Fast, minimum
-/// storage ray/triangle intersection", on the segment u ∈ [0, 1]); its barycentric weights there.
+/// storage ray/triangle intersection", on the segment u ∈ [0, 1]); its barycentric weights there
+/// and its u.
 bool segment_crosses_face(const Model& model, const Data& data, int face, const Vec3& a, const Vec3& b,
-                          Vec3* weights) noexcept {
+                          Vec3* weights, double* along) noexcept {
   const std::array<int, 3>& f = model.net_faces[static_cast<std::size_t>(face)];
   const Vec3& p0 = data.nodes[static_cast<std::size_t>(f[0])].position;
   const Vec3 e1 = data.nodes[static_cast<std::size_t>(f[1])].position - p0;
@@ -64,6 +65,7 @@ bool segment_crosses_face(const Model& model, const Data& data, int face, const 
   const double u = e2.dot(q) / det;
   if (u < 0.0 || u > 1.0) return false;
   *weights = Vec3(1.0 - w1 - w2, w1, w2);
+  if (along != nullptr) *along = u;
   return true;
 }
 
@@ -86,11 +88,14 @@ double sphere_parameter(const NeedleModel& n, int i) noexcept {
   return n.length() * static_cast<double>(i) / static_cast<double>(std::max(1, n.sphere_count - 1));
 }
 
-/// The first crossing of net `net`'s triangles by a → b: its face (−1: none) and weights. A
-/// triangle whose box misses the segment's (boxes_overlap(), its margin covering the crossing
-/// test's rounding) is not crossed: the boxes first, cheaper than the test (about 1 000
-/// triangles a step on the suturing pad, most far from the tip).
-int first_crossing(const Model& model, const Data& data, int net, const Vec3& a, const Vec3& b, Vec3* weights) noexcept {
+/// Calls `visit(face, weights, u)` for each triangle of net `net` that a → b crosses (u ∈ [0, 1]
+/// along it), in the net's order, until it returns true. A triangle whose box misses the
+/// segment's (boxes_overlap(), its margin covering the crossing test's rounding) is not crossed:
+/// the boxes first, cheaper than the test (about 1 000 triangles a step on the suturing pad, most
+/// far from the tip).
+template <typename Visit>
+void visit_crossings(const Model& model, const Data& data, int net, const Vec3& a, const Vec3& b,
+                     Visit visit) noexcept {
   const NetModel& nm = model.nets[static_cast<std::size_t>(net)];
   const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
   for (int f = nm.face_begin; f < nm.face_begin + nm.face_count; ++f) {
@@ -100,9 +105,33 @@ int first_crossing(const Model& model, const Data& data, int net, const Vec3& a,
     const Vec3& p2 = data.nodes[static_cast<std::size_t>(v[2])].position;
     if (!collision_detail::boxes_overlap(p0.cwiseMin(p1).cwiseMin(p2), p0.cwiseMax(p1).cwiseMax(p2), lo, hi))
       continue;
-    if (segment_crosses_face(model, data, f, a, b, weights)) return f;
+    Vec3 w;
+    double u = 0.0;
+    if (segment_crosses_face(model, data, f, a, b, &w, &u) && visit(f, w, u)) return;
   }
-  return -1;
+}
+
+/// The first crossing of net `net`'s triangles by a → b in the net's order: its face (−1: none)
+/// and weights.
+int first_crossing(const Model& model, const Data& data, int net, const Vec3& a, const Vec3& b, Vec3* weights) noexcept {
+  int first = -1;
+  visit_crossings(model, data, net, a, b, [&](int f, const Vec3& w, double) {
+    first = f, *weights = w;
+    return true;
+  });
+  return first;
+}
+
+/// The earliest crossing of net `net`'s triangles by a → b going in (against the triangle's
+/// outward normal): its face (−1: none) and its fraction u ∈ [0, 1] of the segment.
+int first_inward_crossing(const Model& model, const Data& data, int net, const Vec3& a, const Vec3& b,
+                          double* along) noexcept {
+  int first = -1;
+  visit_crossings(model, data, net, a, b, [&](int f, const Vec3&, double u) {
+    if (face_normal(model, data, f).dot(b - a) < 0.0 && (first < 0 || u < *along)) first = f, *along = u;
+    return false;
+  });
+  return first;
 }
 
 /// The tip's sweep over the last step (NeedleState::tip_previous → now): an exit, a way back out,
@@ -273,20 +302,28 @@ void find_punctures(const Model& model, Data& data) noexcept {
     const int end = n.sphere_begin + n.sphere_count;
     const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
     const Vec3 t = b.orientation * needle_tangent(n, n.length());
+    const auto at_tip = [&](const NodeContact& ct) {
+      return !ct.held && ct.body_b == n.body && ct.sphere_b >= tip_first && ct.sphere_b < end;
+    };
     Vec3 force = Vec3::Zero();  // on the needle
+    for (int c = 0; c < nc; ++c)
+      if (const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)]; at_tip(ct)) force -= ct.force;
+    st.tip_force = -force.dot(t);
+    if (st.num_punctures > 0 || !(st.tip_force >= n.puncture_force)) continue;
+    // The deepest triangle the tip goes into, not along or out of: the tangent within the angle
+    // of its inward normal. Where two faces meet (a box's edge) the tip touches both, and the
+    // side's contact may be the deeper; it cannot be punctured from above, the top can.
+    const double cos_max = std::cos(n.puncture_max_angle);
     int deepest = -1;
     for (int c = 0; c < nc; ++c) {
       const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
-      if (ct.held || ct.body_b != n.body || ct.sphere_b < tip_first || ct.sphere_b >= end) continue;
-      force -= ct.force;
-      if (ct.face >= 0 && (deepest < 0 || ct.depth > data.node_contacts[static_cast<std::size_t>(deepest)].depth))
-        deepest = c;
+      if (!at_tip(ct) || ct.face < 0 ||
+          (deepest >= 0 && !(ct.depth > data.node_contacts[static_cast<std::size_t>(deepest)].depth)))
+        continue;
+      if (-face_normal(model, data, ct.face).dot(t) >= cos_max) deepest = c;
     }
-    st.tip_force = -force.dot(t);
-    if (st.num_punctures > 0 || !(st.tip_force >= n.puncture_force) || deepest < 0) continue;
+    if (deepest < 0) continue;
     const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(deepest)];
-    // Into the surface, not along it or out of it: the tangent within the angle of the inward normal.
-    if (!(-face_normal(model, data, ct.face).dot(t) >= std::cos(n.puncture_max_angle))) continue;
     NeedlePuncture& p = st.punctures[0];
     p = NeedlePuncture{};
     p.net = model.node_net[static_cast<std::size_t>(ct.node)];
@@ -301,6 +338,43 @@ void find_punctures(const Model& model, Data& data) noexcept {
     st.puncture_tip_force = st.tip_force;
     st.puncture_time = data.time;
     ++st.punctures_made;
+  }
+}
+
+void stop_needle_tunnels(const Model& model, Data& data) noexcept {
+  data.stages_run |= kStageNeedles;
+  for (std::size_t k = 0; k < model.needles.size(); ++k) {
+    const NeedleModel& n = model.needles[k];
+    NeedleState& st = data.needles[k];
+    if (st.num_punctures > 0 || !st.tip_previous_valid) continue;  // in a passage: the ties hold it
+    BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
+    const Vec3 a = st.tip_previous, tip = world_point(b, needle_tip(n));
+    // Swept here up to where the tip is left: the next step's sweep starts there, and tests only
+    // what moved the tip since (nothing, in a run of core::step()).
+    st.tip_previous = tip;
+    if ((tip - a).squaredNorm() == 0.0) continue;
+    int face = -1;
+    double u = 1.0;
+    for (int net = 0; net < model.num_nets(); ++net) {
+      double un = 1.0;
+      const int f = first_inward_crossing(model, data, net, a, tip, &un);
+      if (f >= 0 && (face < 0 || un < u)) face = f, u = un;
+    }
+    if (face < 0) continue;
+    // The tip's centre's height over the crossed triangle's plane, from s_a at the step's start
+    // to s_b < 0 now: stopped where it is kTunnelStopDepth r_w under the surface, or where it
+    // started if that was deeper.
+    const std::array<int, 3>& v = model.net_faces[static_cast<std::size_t>(face)];
+    const Vec3& p0 = data.nodes[static_cast<std::size_t>(v[0])].position;
+    const Vec3 o = face_normal(model, data, face);
+    const double s_a = o.dot(a - p0), s_b = o.dot(tip - p0);
+    const double s_stop = std::min(s_a, n.wire_radius * (1.0 - kTunnelStopDepth));
+    const double stop = s_a > s_b ? std::clamp((s_a - s_stop) / (s_a - s_b), 0.0, 1.0) : 0.0;
+    b.position += (a + stop * (tip - a)) - tip;
+    st.tip_previous = world_point(b, needle_tip(n));
+    const Vec3 v_tip = b.linear_velocity + b.angular_velocity.cross(st.tip_previous - b.position);
+    if (const double vn = v_tip.dot(o); vn < 0.0) b.linear_velocity -= vn * o;
+    ++st.tunnels_stopped;
   }
 }
 

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "numen/core/model.hpp"
+#include "numen/core/net_tissue_contact.hpp"
 
 namespace numen::core {
 namespace {
@@ -43,6 +44,11 @@ std::string validate_material(const NetMaterial& m, const char** key) {
     return bad("rayleigh_stiffness", "the Rayleigh damping coefficient must be finite and >= 0 s");
   if (!(std::isfinite(m.support_length) && m.support_length > 0.0))
     return bad("support_length", "the support length must be finite and > 0 m");
+  if (!(std::isfinite(m.strain_stiffening) && m.strain_stiffening >= 0.0 &&
+        m.strain_stiffening <= kMaxStrainStiffening))
+    return bad("strain_stiffening",
+               "the strain stiffening b must be in [0, 4]: the contact law's half-space is "
+               "tabulated to b = 4 (docs/tissue.md, \"The contact\")");
   return "";
 }
 
@@ -200,6 +206,7 @@ double set_contact_constants(const TriangleMesh& surface, const MaterialNetSetti
   const double nu = settings.tissue.poisson_ratio;
   net.contact_modulus = settings.tissue.youngs_modulus / (1.0 - nu * nu);
   net.contact_poisson_ratio = nu;
+  net.contact_stiffening = settings.tissue.strain_stiffening;
   net.surface_node_area.assign(static_cast<std::size_t>(surface.num_vertices()), 0.0);
   net.surface_node_normal.assign(static_cast<std::size_t>(surface.num_vertices()), Vec3::Zero());
   double area = 0.0, edge_sum = 0.0;
@@ -314,6 +321,7 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
     constants->explicit_step_limit =
         omega2_max > 0.0 ? 2.0 / omega_max * (std::sqrt(1.0 + zeta * zeta) - zeta) : HUGE_VAL;
     constants->contact_modulus = net.contact_modulus;
+    constants->strain_stiffening = net.contact_stiffening;
     constants->load_patch_radius = net.load_patch_radius;
     constants->surface_mean_edge = mean_edge;
   }

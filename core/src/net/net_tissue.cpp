@@ -33,7 +33,8 @@ double true_radius(const Model& model, const NodeContact& ct) noexcept {
 /// The contact law (net_tissue_contact.hpp) of `net` for a sphere of `radius` and the pair `mp`
 /// (its stiffness already under the time-constant floor).
 TissueContactLaw tissue_law(const NetModel& net, double radius, const MaterialPair& mp) noexcept {
-  return make_tissue_contact_law(net.contact_modulus, net.contact_poisson_ratio, radius,
+  return make_tissue_contact_law(net.contact_modulus, net.contact_poisson_ratio,
+                                 net.contact_stiffening, radius,
                                  net.load_patch_radius, mp.stiffness);
 }
 

@@ -12,12 +12,30 @@
 namespace numen::core {
 namespace {
 
+using detail::kNeoHookeanSphereB;
 using detail::kNeoHookeanSphereG;
 using detail::kNeoHookeanSphereNu;
 using detail::kNeoHookeanSphereNus;
+using detail::kNeoHookeanSphereStiffenings;
 using detail::kNeoHookeanSphereX;
 constexpr int kKnots = TissueContactLaw::kKnots;
 static_assert(detail::kNeoHookeanSpherePoints == kKnots, "the law's knots are the table's");
+static_assert(kNeoHookeanSphereB[0] == 0.0 &&
+                  kNeoHookeanSphereB[kNeoHookeanSphereStiffenings - 1] == kMaxStrainStiffening,
+              "the table's blocks span [0, kMaxStrainStiffening]");
+
+/// The lower of the two table entries about `v` in the increasing `knots` of `n` (v clamped to
+/// them) and v's weight on the upper one.
+struct Bracket {
+  int lower = 0;
+  double weight = 0.0;
+};
+Bracket bracket(const double* knots, int n, double v) noexcept {
+  v = std::clamp(v, knots[0], knots[n - 1]);
+  int j = 0;
+  while (j + 2 < n && v > knots[j + 1]) ++j;
+  return {j, (v - knots[j]) / (knots[j + 1] - knots[j])};
+}
 
 /// √x by Newton's iteration, for the knots' constants at compile time.
 constexpr double constexpr_sqrt(double x) {
@@ -123,22 +141,23 @@ TissueHalfSpace tissue_half_space(const TissueContactLaw& law, double x) noexcep
 }
 
 TissueContactLaw make_tissue_contact_law(double contact_modulus, double poisson_ratio,
-                                         double sphere_radius, double patch_radius,
-                                         double penalty) noexcept {
+                                         double strain_stiffening, double sphere_radius,
+                                         double patch_radius, double penalty) noexcept {
   TissueContactLaw law;
   law.modulus = contact_modulus;
   law.radius = sphere_radius;
   law.patch = kPatchMeanCompliance / (contact_modulus * patch_radius);
   law.penalty = penalty;
-  // r at the knots for ν: linear between the two rows about it (the nearest row outside).
-  const double* nus = kNeoHookeanSphereNu;
-  const double nu = std::clamp(poisson_ratio, nus[0], nus[kNeoHookeanSphereNus - 1]);
-  int j = 0;
-  while (j + 2 < kNeoHookeanSphereNus && nu > nus[j + 1]) ++j;
-  const double w = (nu - nus[j]) / (nus[j + 1] - nus[j]);
+  // r at the knots for ν and b: linear between the two rows and the two blocks about them (the
+  // nearest outside).
+  const Bracket n = bracket(kNeoHookeanSphereNu, kNeoHookeanSphereNus, poisson_ratio);
+  const Bracket s = bracket(kNeoHookeanSphereB, kNeoHookeanSphereStiffenings, strain_stiffening);
+  const auto& lo = kNeoHookeanSphereG[s.lower];
+  const auto& hi = kNeoHookeanSphereG[s.lower + 1];
   for (int i = 0; i < kKnots; ++i) {
-    const double g = (1.0 - w) * kNeoHookeanSphereG[j][i] + w * kNeoHookeanSphereG[j + 1][i];
-    law.ratio[i] = g / kKnotConstants.hertz[i];
+    const double g_lo = (1.0 - n.weight) * lo[n.lower][i] + n.weight * lo[n.lower + 1][i];
+    const double g_hi = (1.0 - n.weight) * hi[n.lower][i] + n.weight * hi[n.lower + 1][i];
+    law.ratio[i] = ((1.0 - s.weight) * g_lo + s.weight * g_hi) / kKnotConstants.hertz[i];
   }
   // r' at the knots: the three-point derivative of the non-uniform knots, one-sided at the ends.
   const double* xs = kNeoHookeanSphereX;

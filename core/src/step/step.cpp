@@ -130,6 +130,9 @@ void step_from_contacts(const Model& model, Data& data) noexcept {
   }
   if (data.contacts_clamped > 0) ++data.contact_clamped_steps;  // body and node contacts
   integrate(model, data);  // sets its bit, and kStageNetSolve or kStageJointSolve if run
+  if constexpr (kWithDeformable) {
+    if (plan & kStageNeedles) stop_needle_tunnels(model, data);  // the tip's sweep against the nets
+  }
   if constexpr (kWithArticulation) {
     if (plan & kStageJointDrift) measure_joint_drift(model, data);  // sets its bit
   }

@@ -114,6 +114,7 @@ void accumulate_needle_figures(const core::Model& model, const core::Data& data,
     r.exits = n.exits;
     r.releases = n.releases;
     r.tunnels = n.tunnels;
+    r.tunnels_stopped = n.tunnels_stopped;
     r.puncture_tip_force_n = n.puncture_tip_force;
     r.deviation_max_mm = std::max(r.deviation_max_mm, n.max_deviation * 1e3);
   }
@@ -126,6 +127,7 @@ void summarize_needles(RunSummary& s) {
     s.needle_exits += r.exits;
     s.needle_releases += r.releases;
     s.needle_tunnels += r.tunnels;
+    s.needle_tunnels_stopped += r.tunnels_stopped;
     std::size_t through = 0;
     for (std::size_t i = 0; i < r.num_passes; ++i) through += r.passes[i].exit_s >= 0.0 ? 1 : 0;
     s.needle_passes += static_cast<std::int64_t>(through);

@@ -60,7 +60,10 @@ constexpr RunSummarySegment kLayout[] = {
      set("thread.eyelets_taken", "thread.eyelets_dropped")},
     {"\n", set("thread.tension_max_n", "thread.breaks")},
     {"  needles: {needle.punctures} punctures, {needle.exits} exits, {needle.releases} releases, "
-     "{needle.tunnels} tunnels; {needle.passes} through; tip force at the last puncture "
+     "{needle.tunnels} tunnels",
+     set("needle.lines")},
+    {" ({needle.tunnels_stopped} steps held back at the surface)", set("needle.tunnels_stopped")},
+    {"; {needle.passes} through; tip force at the last puncture "
      "{needle.puncture_tip_force_n} N (threshold {needle.puncture_force_n} N); deviation from the "
      "arc max {needle.deviation_max_mm} mm; force on the tissue max {needle.tissue_force_max_n} N at "
      "{needle.tissue_force_max_s} s",

@@ -514,6 +514,17 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     warn_organs_inside_tools(scene.model, scene.net_triangles, scene.warnings);
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
+  if (root.table("multirate")) {
+    // The needles' and threads' stages run in the single-rate step: a multirate run would neither
+    // puncture (the god-object's model has no needle) nor report or draw a thread (its state is
+    // the scene loop's, not in the run's view of both loops).
+    for (const TomlTable& n : root.tables("needle"))
+      n.fail("name", "needles run in the single-rate step: a scene with [multirate] has no needle yet "
+                     "(docs/suturing.md, \"What is left\")");
+    for (const TomlTable& t : root.tables("thread"))
+      t.fail("name", "threads run in the single-rate step: a scene with [multirate] has no thread yet "
+                     "(docs/thread.md, \"Limits\")");
+  }
   parse_multirate(root, scene);
   if (scene.multirate && !scene.model.grasps.empty())
     root.tables("grasp").front().fail(

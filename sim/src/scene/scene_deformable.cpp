@@ -37,7 +37,7 @@ using core::Vec3;
   "name", "body", "mesh", "scale", "position", "orientation", "mass", "stiffness", "damping", \
       "bending_stiffness", "bending_damping", "tie_stiffness", "tie_damping", "node_radius",  \
       "material", "rest_speed", "youngs_modulus_kpa", "poisson_ratio", "density",              \
-      "rayleigh_stiffness", "support_length", "load_patch_radius"
+      "rayleigh_stiffness", "support_length", "load_patch_radius", "strain_stiffening"
 
 /// The keys of a net given by its constants per spring and per node (docs/scenes.md,
 /// "Deformables"), which a net given by its material derives (docs/tissue.md).
@@ -45,8 +45,8 @@ constexpr const char* kSpringNetKeys[] = {"mass",           "stiffness",       "
                                           "bending_stiffness", "bending_damping", "tie_stiffness",
                                           "tie_damping"};
 /// The keys of a net given by its material, beside `youngs_modulus_kpa`.
-constexpr const char* kMaterialKeys[] = {"poisson_ratio", "density", "rayleigh_stiffness",
-                                         "support_length", "load_patch_radius"};
+constexpr const char* kMaterialKeys[] = {"poisson_ratio",  "density",           "rayleigh_stiffness",
+                                         "support_length", "load_patch_radius", "strain_stiffening"};
 
 /// An integer key in [lo, hi], or `fallback` when absent.
 int integer_in(const TomlTable& t, std::string_view key, int lo, int hi, int fallback) {
@@ -391,6 +391,7 @@ bool parse_tissue(const TomlTable& t, core::MaterialNetSettings& settings) {
   mat.density = t.number_or("density", 1000.0);
   mat.rayleigh_stiffness = t.number_or("rayleigh_stiffness", 0.0);
   mat.support_length = t.number("support_length");
+  mat.strain_stiffening = t.number_or("strain_stiffening", 0.0);
   const char* key = "";
   if (const std::string err = core::validate_material(mat, &key); !err.empty()) t.fail(key, err);
   settings.node_radius = t.number_in("node_radius", 1e-9, kInf, 0.0);
@@ -425,6 +426,7 @@ void add_tissue_net(const TomlTable& t, core::Model& m, const core::TriangleMesh
   load.interior_nodes = static_cast<int>(volume.interior.size());
   load.tetrahedra = static_cast<int>(volume.tetrahedra.size());
   load.material_constants = c;
+  load.tissue = settings;
   if (c.surface_mean_edge > kPatchEdgeWarning * c.load_patch_radius)
     warnings.push_back(mesh_warning(
         t, t.has("load_patch_radius") ? "load_patch_radius" : "youngs_modulus_kpa", file,

@@ -269,7 +269,8 @@ std::string format_scene_info(const SceneInfo& i) {
          << " kPa, springs " << c.spring_stiffness_min << " to " << c.spring_stiffness_max
          << " N/m, ties " << c.tie_stiffness << " N/m per node; symplectic Euler step at most "
          << c.explicit_step_limit << " s; contact E* " << c.contact_modulus * 1e-3
-         << " kPa, load patch radius " << c.load_patch_radius * 1e3 << " mm" << std::defaultfloat
+         << " kPa, strain stiffening b " << c.strain_stiffening << ", load patch radius "
+         << c.load_patch_radius * 1e3 << " mm" << std::defaultfloat
          << std::setprecision(6) << "\n";
     }
   }
@@ -370,6 +371,7 @@ std::string format_scene_info_json(const SceneInfo& i) {
                                    {"tie_damping_ns_per_m", c.tie_damping},
                                    {"explicit_step_limit_s", c.explicit_step_limit},
                                    {"contact_modulus_pa", c.contact_modulus},
+                                   {"strain_stiffening", c.strain_stiffening},
                                    {"load_patch_radius_m", c.load_patch_radius}};
     }
   }

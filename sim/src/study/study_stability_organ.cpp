@@ -10,9 +10,8 @@
 /// in a scene without one, into the hollow net). Core driven
 /// directly, gravity off. Verdict of study_stability.hpp (energy, finite states, penetration
 /// bound k_t × jump / k_contact on one node contact, as the deformable jump's).
-/// Case "organ-plunge-material": the same with the organ given by its material
-/// (kShippedOrganMaterial, docs/tissue.md): the same surface tetrahedralised as the scene loader
-/// does, the tissue contact law in place of the node contacts' penalty (issue 67's figure 5).
+/// Case "organ-plunge-per-spring": the same surface net given the constants per spring the
+/// shipped organ had before it was given its material (kShippedPerSpringOrgan, issue 67).
 
 #include <algorithm>
 #include <cmath>
@@ -36,11 +35,13 @@ using core::Vec3;
 /// The organ of `scene` (its first net on an anchored body) and a one-sphere tool with the held
 /// body's mass and coupling, `radius` (m), starting at `start`: body 0 the organ's core, body 1
 /// the tool (held); the scene's mesh obstacles (the organ's rigid core surface). Materials and
-/// contact pairs as the scene's. With `material`, the net is the organ's surface given that
-/// material (tetrahedralised as the scene loader does: kInteriorSpacingEdges), else the scene's
+/// contact pairs as the scene's. The net: with `per_spring`, the organ's surface net (its
+/// triangles' nodes) given those constants; else as the scene gives it, a material net rebuilt
+/// from that surface and the scene's material settings as the scene loader built it
+/// (tetrahedralised with interior nodes kInteriorSpacingEdges mean edges apart), or the scene's
 /// own constants per spring.
 core::Model plunge_model(const Scene& scene, double radius, const Vec3& start,
-                         const core::NetMaterial* material) {
+                         const PerSpringOrgan* per_spring) {
   const core::Model& s = scene.model;
   int k = -1;
   for (int i = 0; i < s.num_nets() && k < 0; ++i)
@@ -78,44 +79,61 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start,
     m.meshes.push_back(s.meshes[static_cast<std::size_t>(o.mesh)]);
     m.obstacles.push_back(c);
   }
+  // The surface net: its triangles' nodes, the first of the net's (a material net's interior
+  // nodes follow them).
   core::TriangleMesh mesh;
-  for (int i = 0; i < net.node_count; ++i)
-    mesh.vertices.push_back(s.node_rest[static_cast<std::size_t>(net.node_begin + i)]);
   mesh.triangles = scene.net_triangles[static_cast<std::size_t>(k)];
+  int surface_nodes = 0;
+  for (const auto& t : mesh.triangles)
+    for (const int v : t) surface_nodes = std::max(surface_nodes, v + 1);
+  for (int i = 0; i < surface_nodes; ++i)
+    mesh.vertices.push_back(s.node_rest[static_cast<std::size_t>(net.node_begin + i)]);
+  const NetLoad* load =
+      k < static_cast<int>(scene.net_loads.size()) ? &scene.net_loads[static_cast<std::size_t>(k)] : nullptr;
 #if NUMEN_WITH_DEFORMABLE
   std::string error;
-  if (material != nullptr) {
+  if (per_spring == nullptr && load != nullptr && load->material) {
     core::TetrahedralMesh volume;
     error = tetrahedralize_net(mesh, kInteriorSpacingEdges * mean_edge_length(mesh), volume);
-    core::MaterialNetSettings settings;
+    core::MaterialNetSettings settings = load->tissue;
     settings.name = net.name;
     settings.body = 0;
     settings.material = net.material;
-    settings.tissue = *material;
     if (error.empty()) error = core::add_material_net(m, volume, settings);
   } else {
-    const core::NetSpring& structural = s.net_springs[static_cast<std::size_t>(net.spring_begin)];
     core::NetSettings settings;
     settings.name = net.name;
     settings.body = 0;
     settings.material = net.material;
-    settings.mass = net.mass;
-    settings.stiffness = structural.stiffness;
-    settings.damping = structural.damping;
-    if (net.bending_count > 0) {
-      const core::NetSpring& bending =
-          s.net_springs[static_cast<std::size_t>(net.spring_begin + net.structural_count)];
-      settings.bending_stiffness = bending.stiffness;
-      settings.bending_damping = bending.damping;
+    if (per_spring != nullptr) {
+      settings.mass = per_spring->mass;
+      settings.stiffness = per_spring->stiffness;
+      settings.damping = per_spring->damping;
+      settings.bending_stiffness = per_spring->bending_stiffness;
+      settings.bending_damping = per_spring->bending_damping;
+      settings.tie_stiffness = per_spring->tie_stiffness;
+      settings.tie_damping = per_spring->tie_damping;
+    } else {
+      const core::NetSpring& structural = s.net_springs[static_cast<std::size_t>(net.spring_begin)];
+      settings.mass = net.mass;
+      settings.stiffness = structural.stiffness;
+      settings.damping = structural.damping;
+      if (net.bending_count > 0) {
+        const core::NetSpring& bending =
+            s.net_springs[static_cast<std::size_t>(net.spring_begin + net.structural_count)];
+        settings.bending_stiffness = bending.stiffness;
+        settings.bending_damping = bending.damping;
+      }
+      settings.tie_stiffness = net.tie_stiffness;
+      settings.tie_damping = net.tie_damping;
+      settings.node_radius = s.node_radius[static_cast<std::size_t>(net.node_begin)];
     }
-    settings.tie_stiffness = net.tie_stiffness;
-    settings.tie_damping = net.tie_damping;
-    settings.node_radius = s.node_radius[static_cast<std::size_t>(net.node_begin)];
     error = core::add_net(m, mesh, settings);
   }
 #else  // nets are compiled out: the plan skips this case before it runs (study_stability_scene.cpp)
   std::string error = "needs deformable nets: this build has NUMEN_WITH_DEFORMABLE=OFF";
-  (void)material;
+  (void)per_spring;
+  (void)load;
 #endif
   if (error.empty()) error = core::finalize_model(m);
   if (!error.empty()) throw std::invalid_argument("organ-plunge: " + error);
@@ -126,7 +144,7 @@ core::Model plunge_model(const Scene& scene, double radius, const Vec3& start,
 
 StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h,
                        const StabilityLimits& limits, double horizon,
-                       const core::NetMaterial* material) {
+                       const PerSpringOrgan* per_spring) {
   constexpr double kTubeRadius = 0.0025;  // m, the shipped instrument's tube
   // The organ's approach axis (its frame's z) and its rest surface's nearest point on it.
   const core::BodyModel* core_body = nullptr;
@@ -139,7 +157,7 @@ StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h
   for (const Vec3& r : scene.model.node_rest) face = std::max(face, -(core_body->initial_pose.orientation * r).dot(axis));
   const Vec3 start = centre - (face + 0.020) * axis;
   const Vec3 goal = centre - (face - 0.020) * axis;
-  core::Model base = plunge_model(scene, kTubeRadius, start, material);
+  core::Model base = plunge_model(scene, kTubeRadius, start, per_spring);
   const core::Model model = study::with_scheme(base, integrator, h, "stability study");
   core::Data data = core::make_data(model);
   double k_contact = kInf;
@@ -159,7 +177,7 @@ StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h
       },
       monitor);
   StabilityRow r =
-      make_row("extreme", material ? "organ-plunge-material" : "organ-plunge", integrator, h,
+      make_row("extreme", per_spring ? "organ-plunge-per-spring" : "organ-plunge", integrator, h,
                model.bodies[1].mass, model.nets[0].tie_stiffness, jump, "jump_m", kNaN);
   r.energy_ratio_max = kNaN;
   monitor.fill(r);

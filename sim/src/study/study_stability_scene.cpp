@@ -12,8 +12,9 @@
 ///    −Inf become on the wire (hal::value_to_counts: the offset counts and the int32 extremes);
 ///  - "core-target-nonfinite": NaN / ±Inf written straight into core::Data's target pose and twist
 ///    for 20 steps (what the core does if anything non-finite ever got through);
-///  - "organ-plunge" (study_stability_organ.cpp): the organ of sim/scenes/default.toml, plunged
-///    into; "organ-plunge-material" the same organ given its material (kShippedOrganMaterial).
+///  - "organ-plunge" (study_stability_organ.cpp): the organ of sim/scenes/default.toml (given by
+///    its material), plunged into; "organ-plunge-per-spring" its surface net given the constants
+///    per spring it had before (kShippedPerSpringOrgan).
 /// The loop cases' verdict: every period core::Data finite (bodies, nodes, target, feedback) and
 /// no rollback, nothing non-finite reaching the core (no kInvalidTarget), drive torques finite and
 /// within each axis's max_torque, zero in every period whose input was bad; tool speeds below
@@ -441,7 +442,7 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
   if (!no_nets.empty()) {
     plan.skipped.push_back("deformable-jump: " + no_nets);
     plan.skipped.push_back("organ-plunge: " + no_nets);
-    plan.skipped.push_back("organ-plunge-material: " + no_nets);
+    plan.skipped.push_back("organ-plunge-per-spring: " + no_nets);
   }
   if (!no_joints.empty()) {
     for (const char* c : {"trocar-zero-insertion", "bus-nonfinite", "core-target-nonfinite"})
@@ -458,7 +459,7 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
           : nullptr;
   if (no_nets.empty() && !no_joints.empty()) {
     plan.skipped.push_back("organ-plunge: " + no_joints);
-    plan.skipped.push_back("organ-plunge-material: " + no_joints);
+    plan.skipped.push_back("organ-plunge-per-spring: " + no_joints);
   }
   const std::shared_ptr<const Scene> trocar =
       no_joints.empty() ? std::make_shared<const Scene>(study::load_replayed_scene(dir + "/lattice.toml"))
@@ -480,10 +481,10 @@ void plan_scene_extreme(const StabilityOptions& o, const std::string& dir, Plan&
                  r.rows.push_back(organ_run(*organ, integrator, h, limits, jump_s));
                });
     for (double h : organ ? steps : std::vector<double>{})
-      plan.add("extreme", "organ-plunge-material", case_parameters(integrator, {{"h", h}}),
+      plan.add("extreme", "organ-plunge-per-spring", case_parameters(integrator, {{"h", h}}),
                20.0 * kSceneWeight / 5.0, [=](StabilityResult& r) {
                  r.rows.push_back(organ_run(*organ, integrator, h, limits, jump_s,
-                                            &kShippedOrganMaterial));
+                                            &kShippedPerSpringOrgan));
                });
     if (!trocar) continue;
     plan.add(

@@ -84,6 +84,7 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
     n.releases = 1;
     n.max_deviation = 1e-4;
     n.tunnels = 1;
+    n.tunnels_stopped = 3;
     numen::sim::accumulate_needle_figures(m, d, s);
     d.time = 1.25;
     numen::sim::accumulate_needle_figures(m, d, s);
@@ -96,6 +97,7 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
   EXPECT_EQ(s.needle_exits, 1);
   EXPECT_EQ(s.needle_releases, 1);
   EXPECT_EQ(s.needle_tunnels, 1);
+  EXPECT_EQ(s.needle_tunnels_stopped, 3);
   EXPECT_EQ(s.needle_passes, 1);
   EXPECT_DOUBLE_EQ(s.needle_puncture_tip_force_n, 1.03);
   EXPECT_DOUBLE_EQ(s.needle_puncture_force_n, 1.0);
@@ -118,11 +120,12 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
   EXPECT_EQ(v.reasons[0].rfind("diverged: 1 needle tunnel(s)", 0), 0u) << v.reasons[0];
   const nlohmann::json j = nlohmann::json::parse(numen::sim::format_summary_json(s));
   EXPECT_EQ(j["needle"]["tunnels"].get<std::int64_t>(), 1);
+  EXPECT_EQ(j["needle"]["tunnels_stopped"].get<std::int64_t>(), 3);
   EXPECT_EQ(j["needle"]["passes"].get<std::int64_t>(), 1);
   EXPECT_NEAR(j["needle"]["entry_error_mm"].get<double>(), 1.0, 1e-9);
   const std::string text = numen::sim::format_summary(s);
-  EXPECT_NE(text.find("  needles: 1 punctures, 1 exits, 1 releases, 1 tunnels; 1 through; tip force at the last "
-                      "puncture 1.030 N (threshold 1.000 N); deviation from the arc max 0.300 mm; force on "
+  EXPECT_NE(text.find("  needles: 1 punctures, 1 exits, 1 releases, 1 tunnels (3 steps held back at the surface); "
+                      "1 through; tip force at the last puncture 1.030 N (threshold 1.000 N); deviation from the arc max 0.300 mm; force on "
                       "the tissue max 0.000 N at -1.000 s; from the marks: entry 1.000 mm, exit 2.000 mm\n  "
                       "needle sh: "),
             std::string::npos)

@@ -100,6 +100,7 @@ inline sim::RunSummary full_managed_summary() {
   s.needle_exits = 1;
   s.needle_releases = 2;
   s.needle_tunnels = 1;
+  s.needle_tunnels_stopped = 2;
   s.needle_passes = 1;
   s.needle_puncture_tip_force_n = 1.125;
   s.needle_puncture_force_n = 1.0;

@@ -774,19 +774,23 @@ TEST(DeformableNetSize, EdgeLengthSetsTheNetSize) {
   EXPECT_EQ(own.model.nets[0].surface_point_count, 0);
 }
 
-// The shipped organ (1002 vertices, at or below the default net size) stays one node per vertex,
-// without a fine surface: the default scene's figures are unchanged.
-TEST(DeformableNetSize, ShippedOrganIsItsOwnNet) {
+// The shipped organ (1002 vertices) is simplified to the 500-node surface net its `nodes` asks for,
+// the mesh its fine surface (every vertex mapped), and given its material: 80 nodes inside the
+// surface (580 in all).
+TEST(DeformableNetSize, ShippedOrganIsSimplifiedToItsNodesWithTheMeshAsItsFineSurface) {
   NUMEN_REQUIRE_ARTICULATION();  // the default scene's instrument has joints
   const Scene s = load_scene(scene_path("default"));
   ASSERT_EQ(s.model.num_nets(), 1);
-  EXPECT_EQ(s.model.nets[0].node_count, 1002);
-  EXPECT_EQ(s.model.nets[0].surface_point_count, 0);
-  EXPECT_TRUE(s.model.net_surface_points.empty());
   ASSERT_EQ(s.net_loads.size(), 1u);
-  EXPECT_FALSE(s.net_loads[0].simplified);
-  EXPECT_EQ(s.net_loads[0].nodes_from, "mesh");
   EXPECT_EQ(s.net_loads[0].mesh_vertices, 1002);
+  EXPECT_TRUE(s.net_loads[0].simplified);
+  EXPECT_EQ(s.net_loads[0].nodes_from, "nodes");
+  EXPECT_EQ(s.net_loads[0].nodes_asked, 500);
+  EXPECT_TRUE(s.net_loads[0].material);
+  EXPECT_EQ(s.model.nets[0].node_count, 500 + s.net_loads[0].interior_nodes);
+  EXPECT_EQ(s.net_loads[0].interior_nodes, 80);
+  EXPECT_EQ(s.model.nets[0].surface_point_count, 1002);
+  EXPECT_EQ(s.model.net_surface_points.size(), 1002u);
 }
 
 // A fine surface standing off its net by more than the smaller of half the net's mean edge

@@ -234,7 +234,9 @@ TEST(SceneInfo, EachMeshWithItsTrianglesAndBytes) {
                                     [&](const core::NetModel& x) { return x.name == l.name; });
         ASSERT_NE(n, m.nets.end()) << l.name;
         EXPECT_EQ(l.triangles, n->face_count);
-        EXPECT_EQ(l.vertices, n->node_count);
+        // A material net's surface: its nodes but those inside (default.toml's organ).
+        const sim::NetLoad& load = scene.net_loads[static_cast<std::size_t>(n - m.nets.begin())];
+        EXPECT_EQ(l.vertices, n->node_count - load.interior_nodes);
         EXPECT_EQ(l.heap, static_cast<std::size_t>(n->face_count) * 3 * sizeof(int));
         EXPECT_EQ(l.band_heap, 0u);
         continue;
@@ -382,4 +384,32 @@ TEST(SceneInfo, EveryDeviceIsListedWithItsNodesBodiesAndGrasper) {
   EXPECT_EQ(j.at("devices")[1].at("node_ids").size(), 5u);
   // A scene of one device lists it alone.
   EXPECT_EQ(sim::describe_scene(sim::load_scene(shipped_path("construction"))).devices.size(), 1u);
+}
+
+// An organ given by its material: `numen info` prints the constants derived from it and its
+// contact law's (E*, the strain stiffening, the load patch), and `--json` carries them as the
+// net's "material" object (docs/tissue.md, "What `numen info` reports").
+TEST(SceneInfo, AnOrganGivenByItsMaterialReportsItsConstants) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  numen::test::TempDir dir;
+  const std::string keys =
+      "mesh = \"box\"\nhalf_extents = [0.02, 0.02, 0.01]\nsubdivisions = 6\nyoungs_modulus_kpa = 80.0\n"
+      "poisson_ratio = 0.4\nrayleigh_stiffness = 0.001\nsupport_length = 0.02\nstrain_stiffening = 1.5\n";
+  const sim::Scene scene =
+      sim::load_scene(dir.write("organ.toml", numen::test::indentation_bench_scene(keys, 0.0025, 1e-3)));
+  const sim::SceneInfo i = sim::describe_scene(scene);
+  const std::string text = sim::format_scene_info(i);
+  EXPECT_NE(text.find("    given by its material (docs/tissue.md): "), std::string::npos) << text;
+  EXPECT_NE(text.find("; contact E* 95.24 kPa, strain stiffening b 1.5, load patch radius "), std::string::npos)
+      << text;
+  const nlohmann::json json = nlohmann::json::parse(sim::format_scene_info_json(i));
+  const auto mesh = std::find_if(json.at("meshes").begin(), json.at("meshes").end(),
+                                 [](const nlohmann::json& m) { return m.contains("material"); });
+  ASSERT_NE(mesh, json.at("meshes").end());
+  const nlohmann::json& m = mesh->at("material");
+  EXPECT_NEAR(m.at("contact_modulus_pa").get<double>(), 80e3 / (1.0 - 0.4 * 0.4), 1e-6);
+  EXPECT_EQ(m.at("strain_stiffening").get<double>(), 1.5);
+  EXPECT_EQ(m.at("load_patch_radius_m").get<double>(), scene.model.nets[0].load_patch_radius);
+  EXPECT_GT(m.at("interior_nodes").get<int>(), 0);
+  EXPECT_GT(m.at("tetrahedra").get<int>(), 0);
 }

@@ -98,6 +98,19 @@ exit_mark = [0.0, 0.16, 0.05]
   EXPECT_EQ(s.needle_marks[1].exit[0], numen::core::Vec3(0.0, 0.16, 0.05));
 }
 
+// The needle stage runs in the single-rate step: a scene with [multirate] and a [[needle]] is
+// refused at the needle's name (docs/suturing.md, "What is left"), not by the god-object's model.
+TEST(SceneNeedle, AMultirateSceneIsRefusedAtTheNeedle) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
+  numen::test::TempDir dir;
+  // default_with()'s grasper is refused too, after the needle.
+  const std::string text = default_with("\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n\n[[needle]]\n"
+                                        "name = \"sh\"\nposition = [0.0, 0.1, 0.1]\npuncture_force = 1.5\n");
+  const auto [line, column] = where(text, "name = \"sh\"", "\"sh\"");
+  numen::test::expect_located(numen::test::load_error(dir, text), (dir / "bad.toml").string(), line, column,
+                              "needle[0].name", "needles run in the single-rate step");
+}
+
 TEST(SceneNeedle, BadNeedlesAreLocatedErrorsNamingTheirKeys) {
   NUMEN_REQUIRE_DEFORMABLE();
   numen::test::TempDir dir;

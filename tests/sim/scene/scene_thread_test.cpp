@@ -72,6 +72,18 @@ TEST(SceneThread, BadThreadsAreLocatedErrorsNamingTheirKeys) {
   }
 }
 
+// A thread's stage runs in the single-rate step: a scene with [multirate] and a [[thread]] is
+// refused at the thread's name (its state would be the scene loop's, which the run neither
+// reported nor drew: docs/thread.md, "Limits").
+TEST(SceneThread, AMultirateSceneIsRefusedAtTheThread) {
+  numen::test::TempDir dir;
+  const std::string text = probe_scene() + "\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n" +
+                           "\n[[thread]]\nname = \"suture\"\nlength = 0.05\nattach_body = \"probe\"\n";
+  const int line = static_cast<int>(std::count(text.begin(), text.end(), '\n')) - 2;
+  numen::test::expect_located(numen::test::load_error(dir, text), (dir / "bad.toml").string(), line, 8,
+                              "thread[0].name", "threads run in the single-rate step");
+}
+
 // A thread touches tissue from outside and goes into it only behind a needle: one whose initial
 // straight shape runs through a deformable's closed rest surface is refused at its direction,
 // naming the thread, the deformable and the node; pointed away from it, it loads.

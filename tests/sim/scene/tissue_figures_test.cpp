@@ -24,6 +24,7 @@
 #include "numen/core/net_tissue_contact.hpp"
 #include "numen/core/step.hpp"
 #include "numen/sim/scene/scene.hpp"
+#include "numen/sim/study/study_stability_cases.hpp"
 #include "mesh/mesh_shape_query.hpp"
 #include "organ_indentation.hpp"
 #include "scene_text.hpp"
@@ -165,38 +166,57 @@ void tissue_convergence(const char* label, bool ellipsoid, const Vec3& from) {
 // 10 % of Hertz for δ ≤ 0.1 R = 0.5 mm, and against GetFEM's neo-Hookean cylinder block of radius
 // and height 30 mm held at ℓ = 30 mm (docs/indentation-reference.md, "Block mode") within 10 % to
 // δ = 3 mm (0.6 R), at every size.
-TEST(TissueFigures, ASphereIntoABlockIsHertzsAtThreeNetSizes) {
-  NUMEN_REQUIRE_DEFORMABLE();
+/// Figure 2's block (see the tests below) with the strain stiffening `b`, pressed to `depth_max`
+/// (mm): F/E against GetFEM's block `csv` within 10 % at every depth to `checked_to` (mm; printed
+/// deeper), and against Hertz within 10 % to δ = 0.1 R, at the three net sizes.
+static void block_against_reference(const char* csv, double b, double depth_max, double checked_to) {
   TempDir dir;
-  const auto reference = tissue_block_reference("block_reference_neo_nu045.csv");
+  const auto reference = tissue_block_reference(csv);
   ASSERT_FALSE(reference.empty());
   const Vec3 down(0, 0, -1);
   const Vec3 from(0.0, 0.0, 0.015 + 0.005 + 0.0005);  // 0.5 mm above the block's top face
-  const double depths[] = {0.1, 0.2, 0.3, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0};
+  const double depths[] = {0.1, 0.2, 0.3, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0};
   for (const int subdivisions : {14, 20, 29}) {
     const std::string keys =
         "mesh = \"box\"\nhalf_extents = [0.03, 0.03, 0.015]\nsubdivisions = " +
         std::to_string(subdivisions) +
         "\nyoungs_modulus_kpa = 100.0\npoisson_ratio = 0.45\nrayleigh_stiffness = 0.001\n"
-        "support_length = 0.03\n";
+        "support_length = 0.03\nstrain_stiffening = " + std::to_string(b) + "\n";
     const numen::sim::Scene s =
         numen::sim::load_scene(dir.write("block.toml", numen::test::indentation_bench_scene(keys, 0.005, 1e-3)));
-    const auto curve = organ::indentation_curve(s.model, from, down, 0.005, 0.003, 1, 0.0005);
+    const auto curve = organ::indentation_curve(s.model, from, down, 0.005, 1e-3 * depth_max, 1, 0.0005);
     const double edge = 60.0 / (subdivisions + 1);
     double worst_hertz = 0.0;
     for (const double d : depths) {
+      if (d > depth_max + 1e-9) break;
       const double fe = tissue_force_at(curve, 1e-3 * d) / 100e3 * 1e6;  // F/E (mm²)
       const double hertz = tissue_hertz_over_e(d);
       const double ref = reference.at(d);
-      std::printf("[tissue figure 2] edge %.2f mm (%d nodes, patch %.2f mm): delta %.1f mm: F/E %.4f mm2, "
-                  "Hertz %.4f (%+.1f %%), GetFEM neo %.4f (%+.1f %%)\n",
-                  edge, s.model.nets[0].node_count, 1e3 * s.model.nets[0].load_patch_radius, d, fe, hertz,
+      std::printf("[tissue figure 2] b %g, edge %.2f mm (%d nodes, patch %.2f mm): delta %.1f mm: F/E %.4f mm2, "
+                  "Hertz %.4f (%+.1f %%), GetFEM %.4f (%+.1f %%)\n",
+                  b, edge, s.model.nets[0].node_count, 1e3 * s.model.nets[0].load_patch_radius, d, fe, hertz,
                   100.0 * (fe / hertz - 1.0), ref, 100.0 * (fe / ref - 1.0));
       if (d <= 0.5) worst_hertz = std::max(worst_hertz, std::abs(fe / hertz - 1.0));
-      EXPECT_LT(std::abs(fe / ref - 1.0), 0.10) << "edge " << edge << " mm, delta " << d;
+      if (d <= checked_to + 1e-9) {
+        EXPECT_LT(std::abs(fe / ref - 1.0), 0.10) << "edge " << edge << " mm, delta " << d;
+      }
     }
     EXPECT_LT(worst_hertz, 0.10) << "edge " << edge << " mm";
   }
+}
+
+TEST(TissueFigures, ASphereIntoABlockIsHertzsAtThreeNetSizes) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  block_against_reference("block_reference_neo_nu045.csv", 0.0, 3.0, 3.0);
+}
+
+// Figure 2 with the strain stiffening b = 1 (the shipped organ's), to δ = 5 mm (R): against
+// GetFEM's block of the same stiffened law (docs/figures/block_reference_neo_b1_nu045.csv),
+// checked to 4 mm (0.8 R). The finest net falls away from it with depth (−8.9 % at 4 mm, −13 %
+// at 5 mm; the two coarser within 1.5 %), as it does at b = 0 (−5.6 % at 3 mm): docs/tissue.md.
+TEST(TissueFigures, AStrainStiffenedBlockIsGetFemsAtThreeNetSizes) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  block_against_reference("block_reference_neo_b1_nu045.csv", 1.0, 5.0, 4.0);
 }
 
 
@@ -248,13 +268,17 @@ TEST(TissueFigures, TheIssuesEllipsoidOn2500NodesNeverJumps) {
   EXPECT_LE(jump, 0.05);
 }
 
-// The shipped organ keeps its feel with a material: sim/data/organ_lobe.obj as its own 1 002-node
-// net, given per spring (sim/scenes/default.toml's constants) and by its material (E = 100 kPa,
-// ν = 0.45, ρ = 1000 kg/m³, β = 1 ms, ℓ = 20 mm), the 2.5 mm sphere at 20 mm/s into its convex
-// face: the material organ's force within 10 % of the per-spring organ's from 1 to 4 mm (printed
-// to 6 mm: deeper the per-spring organ keeps to Hertz's law, a linear solid's, where the
-// neo-Hookean half-space of the contact law gives way: docs/tissue.md). E = 120 kPa is the
-// shipped organ's material (kShippedOrganMaterial): at 100 kPa the force is 9–24 % below.
+// The shipped organ keeps its feel with a material: sim/data/organ_lobe.obj given per spring (the
+// constants sim/scenes/default.toml shipped before issue 67, the mesh as its own 1 002-node net) and
+// by its material (kShippedOrganMaterial: E = 100 kPa, ν = 0.45, ρ = 1000 kg/m³, β = 1 ms, ℓ = 20
+// mm, strain stiffening b = 1) on the shipped scene's 500-node net and on the mesh as its net, the
+// 2.5 mm sphere at 20 mm/s into its convex face at five points (the first the fit's). At the first
+// point each material net's force is within 10 % of the per-spring organ's from 1 to 6 mm; at
+// every point within 10 % from 1.5 to 3 mm (and from 1 mm on the 500-node net). Deeper the material
+// organ gives way more at the other points (to −27 % at 6 mm) where the per-spring organ, a tied
+// membrane, feels alike everywhere: printed, the finding of docs/tissue.md. Below 1 mm the
+// per-spring organ's penalty has taken up more force (printed from 0.5 mm). Without the stiffening
+// (b = 0, a neo-Hookean solid) no E keeps the first point within 10 % past 4 mm (docs/tissue.md).
 TEST(TissueFigures, TheShippedOrganWithItsMaterialKeepsItsFeel) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
@@ -262,24 +286,42 @@ TEST(TissueFigures, TheShippedOrganWithItsMaterialKeepsItsFeel) {
   const std::string per_spring = file +
       "mass = 0.07\nstiffness = 200.0\ndamping = 0.1\nbending_stiffness = 50.0\nbending_damping = 0.03\n"
       "tie_stiffness = 100.0\ntie_damping = 0.17\n";
-  const std::string material = file +
-      "youngs_modulus_kpa = 120.0\npoisson_ratio = 0.45\ndensity = 1000.0\nrayleigh_stiffness = 0.001\n"
-      "support_length = 0.02\n";
-  const Vec3 from(0.004, -0.003, -0.03), up = Vec3::UnitZ();
-  std::vector<std::vector<organ::IndentationSample>> curves;
-  for (const std::string& keys : {per_spring, material}) {
-    const numen::sim::Scene s =
-        numen::sim::load_scene(dir.write("organ.toml", numen::test::indentation_bench_scene(keys, 0.0025, 1e-3)));
-    const double touch = organ::first_touch(s.model, from, up, 0.0025);
-    ASSERT_TRUE(std::isfinite(touch));
-    curves.push_back(organ::indentation_curve(s.model, from, up, 0.02, 0.006, 1, touch));
-  }
-  for (const double depth : {0.001, 0.002, 0.003, 0.004, 0.005, 0.006}) {
-    const double spring = tissue_force_at(curves[0], depth), tissue = tissue_force_at(curves[1], depth);
-    std::printf("[tissue feel] depth %.0f mm: per spring %.3f N, material %.3f N (%+.1f %%)\n", 1e3 * depth,
-                spring, tissue, 100.0 * (tissue / spring - 1.0));
-    if (depth <= 0.004 + 1e-9) {
-      EXPECT_NEAR(tissue, spring, 0.10 * spring) << depth;
+  const core::NetMaterial& m = numen::sim::stability::kShippedOrganMaterial;
+  char material_keys[256];
+  std::snprintf(material_keys, sizeof material_keys,
+                "youngs_modulus_kpa = %.17g\npoisson_ratio = %.17g\ndensity = %.17g\nrayleigh_stiffness = %.17g\n"
+                "support_length = %.17g\nstrain_stiffening = %.17g\n",
+                1e-3 * m.youngs_modulus, m.poisson_ratio, m.density, m.rayleigh_stiffness, m.support_length,
+                m.strain_stiffening);
+  const std::string material = file + material_keys;
+  std::vector<numen::sim::Scene> scenes;
+  for (const std::string& keys : {per_spring, material + "nodes = 500\n", material})
+    scenes.push_back(
+        numen::sim::load_scene(dir.write("organ.toml", numen::test::indentation_bench_scene(keys, 0.0025, 1e-3))));
+  const Vec3 up = Vec3::UnitZ();
+  const double points[][2] = {{0.004, -0.003}, {0.0, 0.0}, {-0.006, 0.004}, {0.008, 0.003}, {-0.004, -0.006}};
+  for (std::size_t p = 0; p < std::size(points); ++p) {
+    const Vec3 from(points[p][0], points[p][1], -0.03);
+    std::vector<std::vector<organ::IndentationSample>> curves;
+    for (const numen::sim::Scene& s : scenes) {
+      const double touch = organ::first_touch(s.model, from, up, 0.0025);
+      ASSERT_TRUE(std::isfinite(touch)) << p;
+      curves.push_back(organ::indentation_curve(s.model, from, up, 0.02, 0.006, 1, touch));
+    }
+    for (const double depth : {0.0005, 0.001, 0.0015, 0.002, 0.0025, 0.003, 0.004, 0.005, 0.006}) {
+      const double spring = tissue_force_at(curves[0], depth), shipped = tissue_force_at(curves[1], depth),
+                   mesh = tissue_force_at(curves[2], depth);
+      std::printf("[tissue feel] point (%+.0f, %+.0f) mm, depth %.1f mm: per spring %.3f N, material on 500 "
+                  "nodes %.3f N (%+.1f %%), on the mesh %.3f N (%+.1f %%)\n",
+                  1e3 * from.x(), 1e3 * from.y(), 1e3 * depth, spring, shipped, 100.0 * (shipped / spring - 1.0),
+                  mesh, 100.0 * (mesh / spring - 1.0));
+      const bool all_depths = p == 0;
+      if (depth >= 0.001 - 1e-9 && (all_depths || depth <= 0.003 + 1e-9)) {
+        EXPECT_NEAR(shipped, spring, 0.10 * spring) << p << " " << depth;
+      }
+      if (depth >= (all_depths ? 0.001 : 0.0015) - 1e-9 && (all_depths || depth <= 0.003 + 1e-9)) {
+        EXPECT_NEAR(mesh, spring, 0.10 * spring) << p << " " << depth;
+      }
     }
   }
 }

@@ -81,7 +81,7 @@ TEST(ViewSceneMessage, DescribesTheNetsBodiesAndObstaclesOfTheDeformableScene) {
 // (sim/viewer/js/tissue_dimple.js); a net given per spring does not carry the key.
 TEST(ViewSceneMessage, MarksAnOrganGivenByItsMaterial) {
   NUMEN_REQUIRE_DEFORMABLE();
-  const auto per_spring = parsed_scene_message(numen::sim::load_scene(shipped_scene("default.toml")));
+  const auto per_spring = parsed_scene_message(numen::sim::load_scene(shipped_scene("deformable.toml")));
   ASSERT_GT(per_spring["nets"].size(), 0u);
   for (const auto& n : per_spring["nets"]) EXPECT_FALSE(n.contains("tissue")) << n["name"];
   numen::test::TempDir dir;

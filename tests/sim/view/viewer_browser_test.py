@@ -26,7 +26,7 @@ net (fine_surface_recording.py):
   - the organ is drawn as its fine surface (every triangle sent), in the net's green where its
     middle projects, with the coarse net hidden until its toggle shows it; the page's fine
     vertices are where the formula of docs/viewer.md puts them from the frame's node positions.
-On 5 s of the default scene with its organ given by its material (a 500-node net):
+On 5 s of the default scene (its organ given by its material, a 500-node net):
   - the page draws the tool's dimple in the organ (more than 1 mm), and no drawn vertex of the
     organ is inside a sphere of another body.
 On a run that latches a fault (the lattice scene on a bus losing 30 % of its frames):
@@ -556,17 +556,13 @@ def record_scene_text(numen, out, name, text, duration):
 
 
 def check_tissue_dimple(numen, browser, out):
-    """The default scene with its organ given by its material (E = 120 kPa, ν = 0.45, on a
-    500-node net; docs/tissue.md): 5 s of the excerpt, where the tool is 2.3 mm into the surface
-    the net carries. The page draws the dimple under it (tissue_dimple.js): a move of more than
-    1 mm, and no drawn vertex of the organ inside a sphere of another body."""
-    sys.path.insert(0, os.path.join(ROOT, "docs", "figures"))
-    import tissue_default_run  # noqa: E402  (material_scene(): default.toml given a material)
+    """The default scene, its organ given by its material (E = 100 kPa, ν = 0.45, on a 500-node
+    net; docs/tissue.md): 5 s of the excerpt, where the tool is in the surface the net carries.
+    The page draws the dimple under it (tissue_dimple.js): a move of more than 1 mm, and no drawn
+    vertex of the organ inside a sphere of another body."""
     name = "tissue_dimple"
     with open(os.path.join(ROOT, "sim", "scenes", "default.toml")) as f:
-        text = tissue_default_run.material_scene(
-            f.read(), {"youngs_modulus_kpa": 120.0, "poisson_ratio": 0.45, "density": 1000.0,
-                       "rayleigh_stiffness": 0.001, "support_length": 0.02}, 500)
+        text = f.read()
     try:
         rec, r = record_scene_text(numen, out, name, text, 5.0)
     except RuntimeError as e:

@@ -71,7 +71,10 @@ struct NeedleState {
   double puncture_tip_force = 0.0; ///< tip_force in the step of the last puncture (N).
   double puncture_time = 0.0;      ///< Simulated time of the last puncture (s).
   double max_deviation = 0.0;      ///< Largest NeedlePuncture::deviation this step (m).
-  Vec3 tip_previous = Vec3::Zero();  ///< The tip at the last step's start (m, world): the sweep's start.
+  /// Where the tip was last swept to (m, world): the next sweep's start. The tip at the last
+  /// step's start (tie_needles()), or, with no passage, where stop_needle_tunnels() left it at
+  /// that step's end (its segment already swept against the nets, which have not moved since).
+  Vec3 tip_previous = Vec3::Zero();
   bool tip_previous_valid = false;
   std::int64_t punctures_made = 0; ///< Entries since reset.
   std::int64_t exits = 0;          ///< Exits since reset.
@@ -79,6 +82,9 @@ struct NeedleState {
   /// Steps since reset in which the tip crossed a net's surface inwards without a puncture (the
   /// penalty contact did not hold it: it went through without the threshold): must stay 0.
   std::int64_t tunnels = 0;
+  /// Steps since reset in which stop_needle_tunnels() held the tip back at a net's surface that
+  /// the step's motion took it through without a puncture.
+  std::int64_t tunnels_stopped = 0;
   /// The points let go past the tail this step, [0, num_tail_releases): where the needle has been
   /// pulled through, what a thread tied to its tail takes over as eyelets (thread.hpp,
   /// ThreadModel::needle). Written by tie_needles() each step.
@@ -103,5 +109,22 @@ void tie_needles(const Model& model, Data& data) noexcept;
 /// tangent is within NeedleModel::puncture_max_angle of the contacts' inward normal: the entry
 /// point at its deepest triangle contact, tied from the next step. No allocation.
 void find_punctures(const Model& model, Data& data) noexcept;
+
+/// How far under the surface (in wire radii r_w) stop_needle_tunnels() leaves the tip sphere's
+/// lowest point: its centre (1 − kTunnelStopDepth) r_w over the crossed triangle's plane.
+inline constexpr double kTunnelStopDepth = 0.5;
+
+/// Continuous collision of each needle's tip, after the integration (step(); kStageNeedles): a
+/// needle not in a passage whose tip's centre went this step (NeedleState::tip_previous → its tip
+/// now) through a net triangle against its outward normal — a step longer than the penalty
+/// contacts could stop, as when the tip slips off a box's corner and the coupling spring throws
+/// it 0.4 mm along its arc (docs/suturing.md, "The pad's edge") — is translated back along that
+/// path to where its centre is (1 − kTunnelStopDepth) r_w over the earliest crossed triangle's
+/// plane (or to its start, if that was lower), and its tip's velocity into the triangle is
+/// removed from its body's linear velocity; counted in NeedleState::tunnels_stopped. A puncture is
+/// the tip's only way in (the threshold read at the step's start, find_punctures()). Conservative
+/// advancement of the tip alone (the swept centre against the triangles at the step's end; Mirtich
+/// 1996, "Impulse-based dynamic simulation of rigid body systems", ch. 3). No allocation.
+void stop_needle_tunnels(const Model& model, Data& data) noexcept;
 
 }  // namespace numen::core

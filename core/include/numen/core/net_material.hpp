@@ -63,6 +63,12 @@ struct NetMaterial {
   double density = 0.0;             ///< ρ (kg/m³), > 0.
   double rayleigh_stiffness = 0.0;  ///< β (s), ≥ 0: γ = β k on every spring and tie.
   double support_length = 0.0;      ///< ℓ (m), > 0: the ties' stiffness per volume κ = E_net/ℓ².
+  /// b, in [0, kMaxStrainStiffening] (net_tissue_contact.hpp): the tissue's exponential
+  /// (Demiray 1972) strain stiffening in the contact law's half-space,
+  /// W = μ/(2b) (exp(b Q) − 1) + λ/2 (ln J)², Q = I₁ − 3 − 2 ln J (0: the compressible
+  /// neo-Hookean law). The small-strain response, and so the net's springs and ties, are E's and
+  /// ν's whatever b.
+  double strain_stiffening = 0.0;
 };
 
 /// The constants add_material_net() derived (what `numen info` reports).
@@ -86,6 +92,7 @@ struct MaterialNetConstants {
   /// ζ ≫ 1. The implicit integrators have none.
   double explicit_step_limit = 0.0;
   double contact_modulus = 0.0;    ///< E* = E / (1 − ν²) (Pa) of the contact law.
+  double strain_stiffening = 0.0;  ///< b of the contact law (NetMaterial::strain_stiffening).
   double load_patch_radius = 0.0;  ///< ρ (m) of the contact law.
   double surface_mean_edge = 0.0;  ///< The surface net's mean edge (m).
 };

@@ -77,6 +77,9 @@ struct NetModel {
   /// With contact_modulus: the tissue's Poisson's ratio ν, in (−1, 0.5): the row of the contact
   /// law's neo-Hookean half-space (net_tissue_contact.hpp).
   double contact_poisson_ratio = 0.0;
+  /// With contact_modulus: the tissue's strain stiffening b in [0, kMaxStrainStiffening]
+  /// (NetMaterial::strain_stiffening): the block of the contact law's half-space.
+  double contact_stiffening = 0.0;
   /// ρ (m, > 0 with contact_modulus): the radius of the load patch that lays a contact's force
   /// on the surface's nodes (net_tissue_contact.hpp).
   double load_patch_radius = 0.0;

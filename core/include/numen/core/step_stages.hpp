@@ -19,8 +19,9 @@ enum StepStage : std::uint32_t {
   kStageContacts = 1u << 1,       ///< detect_contacts: broad and narrow phase, bodies.
   kStageNodeContacts = 1u << 2,   ///< detect_node_contacts: net nodes against everything.
   kStageGrasp = 1u << 3,          ///< update_grasps: grasp rules, the held bodies' contacts off (grasp.hpp).
-  /// tie_needles (before the forces) and find_punctures (after them): a needle through tissue
-  /// (needle_puncture.hpp). Only a model with nets and a needle that punctures runs it.
+  /// tie_needles (before the forces), find_punctures (after them) and stop_needle_tunnels (after
+  /// the integration): a needle through tissue (needle_puncture.hpp). Only a model with nets and a
+  /// needle that punctures runs it.
   kStageNeedles = 1u << 4,
   kStageBodyForces = 1u << 5,     ///< gravity, applied wrenches, coupling, contact and grasp forces.
   kStageThreads = 1u << 6,        ///< step_threads: the suture threads' own implicit step (thread.hpp).

@@ -191,6 +191,9 @@ struct NeedleRunFigures {
   std::int64_t exits = 0;              ///< Exits.
   std::int64_t releases = 0;           ///< Puncture points let go.
   std::int64_t tunnels = 0;            ///< Steps its tip crossed tissue inwards without a puncture.
+  /// Steps its tip was held back at tissue its step would have taken it through
+  /// (core::NeedleState::tunnels_stopped).
+  std::int64_t tunnels_stopped = 0;
   double first_tunnel_s = -1.0;        ///< Time of the first tunnel (s; −1: none).
   double puncture_tip_force_n = 0.0;   ///< Its tip's force along it at its last puncture (N).
   double puncture_force_n = 0.0;       ///< Its threshold (NeedleModel::puncture_force; 0: none).
@@ -349,6 +352,7 @@ struct RunSummary {
   std::int64_t needle_exits = 0;         ///< Exits.
   std::int64_t needle_releases = 0;      ///< Puncture points let go.
   std::int64_t needle_tunnels = 0;       ///< Tunnels (each needle's a warning; exit status 7).
+  std::int64_t needle_tunnels_stopped = 0;  ///< Steps a needle's tip was held back at tissue.
   std::int64_t needle_passes = 0;        ///< Passes that went through (an entry, then an exit), all needles.
   double needle_puncture_tip_force_n = 0.0;  ///< Tip force at the run's last puncture (N).
   double needle_puncture_force_n = 0.0;  ///< That needle's threshold (N).

@@ -97,6 +97,9 @@ struct NetLoad {
   int interior_nodes = 0;  ///< Nodes inside the surface (after the surface's own).
   int tetrahedra = 0;      ///< Cells of the volume mesh.
   core::MaterialNetConstants material_constants;  ///< What core::add_material_net() derived.
+  /// The settings the material net was made with (its material, the load patch radius and node
+  /// radius as given, 0 where derived); default-constructed for a net given per spring.
+  core::MaterialNetSettings tissue;
 };
 
 /// The node count of an organ's net made from a mesh file when the scene asks for none: a mesh

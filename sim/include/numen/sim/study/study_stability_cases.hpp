@@ -155,21 +155,36 @@ void plan_articulation(const StabilityOptions& o, Plan& plan);
 /// this build left out (the jump: nets; the others: the trocar's joints) are not planned; each
 /// gets one "case: reason" line in Plan::skipped.
 void plan_scene_extreme(const StabilityOptions& o, const std::string& scene_dir, Plan& plan);
+/// Per-spring constants of a net (core::NetSettings' masses, springs and ties) for "organ-plunge-
+/// per-spring".
+struct PerSpringOrgan {
+  double mass = 0.0;               ///< kg, all nodes.
+  double stiffness = 0.0;          ///< N/m, structural springs.
+  double damping = 0.0;            ///< N·s/m.
+  double bending_stiffness = 0.0;  ///< N/m.
+  double bending_damping = 0.0;    ///< N·s/m.
+  double tie_stiffness = 0.0;      ///< N/m per node.
+  double tie_damping = 0.0;        ///< N·s/m per node.
+};
+
 /// "organ-plunge" of "extreme" (study_stability_organ.cpp): the organ of `scene` (a net on an
-/// anchored body; sim/scenes/default.toml) and a one-sphere god-object of the held body's mass and
-/// coupling whose target jumps 40 mm into it in one period; `horizon` s of steps of `h`. With
-/// `material` ("organ-plunge-material"), the organ's surface is given that material (its volume
-/// tetrahedralised as the scene loader does, core::add_material_net(); docs/tissue.md) in place of
-/// the scene's constants per spring. Throws std::invalid_argument for a scene without an organ or
-/// a held body, or a surface the material net refuses.
+/// anchored body; sim/scenes/default.toml) as the scene gives it (by its material, rebuilt from its
+/// surface as the scene loader built it, or per spring) and a one-sphere god-object of the held
+/// body's mass and coupling whose target jumps 40 mm into it in one period; `horizon` s of steps
+/// of `h`. With `per_spring` ("organ-plunge-per-spring"), the organ's surface net is given those
+/// constants per spring instead. Throws std::invalid_argument for a scene without an organ or a
+/// held body, or a surface the net refuses.
 StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h,
                        const StabilityLimits& limits, double horizon,
-                       const core::NetMaterial* material = nullptr);
+                       const PerSpringOrgan* per_spring = nullptr);
 
-/// The shipped organ's material (docs/tissue.md, "The shipped organ keeps its feel"): E = 120 kPa,
-/// ν = 0.45, ρ = 1000 kg/m³, β = 1 ms, ℓ = 20 mm; "organ-plunge-material" gives it the organ of
-/// sim/scenes/default.toml.
-inline constexpr core::NetMaterial kShippedOrganMaterial{120e3, 0.45, 1000.0, 1e-3, 0.020};
+/// The shipped organ's material (sim/scenes/default.toml; docs/tissue.md, "The shipped organ keeps
+/// its feel"): E = 100 kPa, ν = 0.45, ρ = 1000 kg/m³, β = 1 ms, ℓ = 20 mm, strain stiffening b = 1.
+inline constexpr core::NetMaterial kShippedOrganMaterial{100e3, 0.45, 1000.0, 1e-3, 0.020, 1.0};
+/// The constants per spring sim/scenes/default.toml's organ had before it was given its material
+/// (issue 67; docs/organs.md, "Organs"): 70 g, structural springs 200 N/m and 0.1 N·s/m, bending
+/// springs 50 N/m and 0.03 N·s/m, ties 100 N/m and 0.17 N·s/m per node.
+inline constexpr PerSpringOrgan kShippedPerSpringOrgan{0.07, 200.0, 0.1, 50.0, 0.03, 100.0, 0.17};
 /// "scenes": every shipped scene (`scene_dir`/*.toml) through run_scene() with its contact
 /// stiffness and, separately, its coupling stiffness swept to 1e12 N/m
 /// (study_stability_scenes.cpp). A scene this build cannot load (NUMEN_WITH_* options) gets one
