@@ -90,7 +90,7 @@ TEST(NetMaterial, EveryConstantFollowsFromTheMaterialAndTheTetrahedra) {
   }
   EXPECT_NEAR(net.load_patch_radius, core::default_load_patch_radius(8.0 * face), 1e-15);
   EXPECT_NEAR(core::default_load_patch_radius(8.0 * face),
-              2.0 * std::sqrt(2.0 * 8.0 * face / (std::sqrt(3.0) * 500.0)), 1e-15);
+              3.0 * std::sqrt(2.0 * 8.0 * face / (std::sqrt(3.0) * 500.0)), 1e-15);
   EXPECT_NEAR(c.load_patch_radius, net.load_patch_radius, 0.0);
   EXPECT_NEAR(c.surface_mean_edge, r * std::sqrt(2.0), 1e-15);
   // A spoke is in the four tetrahedra of its tip (Σ V_t = V/2, L = r); an octahedron edge in two

@@ -428,7 +428,7 @@ TEST(SceneTissue, APoissonsRatioBelowTheContactLawsTableIsWarned) {
 }
 
 // A net coarser than its load patch is made for is warned at load (its mean edge above 0.6 ρ):
-// the shipped organ at 250 nodes, not at 500 (the default patch's design size), and not when
+// the shipped organ at 100 nodes, not at 500 (the default patch's design size), and not when
 // load_patch_radius is given large enough; the warning names the key that set ρ.
 TEST(SceneTissue, ANetCoarserThanItsLoadPatchIsWarned) {
   NUMEN_REQUIRE_DEFORMABLE();
@@ -436,17 +436,17 @@ TEST(SceneTissue, ANetCoarserThanItsLoadPatchIsWarned) {
   const auto warned = [](const Scene& s) { return warning_containing(s, "load patch radius"); };
   const Scene at_500 = load_scene(dir.write("a.toml", bench_scene(organ_keys("nodes = 500\n"), 0.0025, 1e-3)));
   EXPECT_EQ(warned(at_500), "");
-  const Scene at_250 = load_scene(dir.write("b.toml", bench_scene(organ_keys("nodes = 250\n"), 0.0025, 1e-3)));
-  const std::string w = warned(at_250);
+  const Scene at_100 = load_scene(dir.write("b.toml", bench_scene(organ_keys("nodes = 100\n"), 0.0025, 1e-3)));
+  const std::string w = warned(at_100);
   ASSERT_NE(w, "");
   EXPECT_NE(w.find("deformable[0].youngs_modulus_kpa"), std::string::npos) << w;
   EXPECT_NE(w.find("resolves the patch poorly"), std::string::npos) << w;
-  EXPECT_GT(at_250.net_loads[0].material_constants.surface_mean_edge,
-            0.6 * at_250.net_loads[0].material_constants.load_patch_radius);
+  EXPECT_GT(at_100.net_loads[0].material_constants.surface_mean_edge,
+            0.6 * at_100.net_loads[0].material_constants.load_patch_radius);
   const Scene given = load_scene(
-      dir.write("c.toml", bench_scene(organ_keys("nodes = 250\nload_patch_radius = 0.015\n"), 0.0025, 1e-3)));
+      dir.write("c.toml", bench_scene(organ_keys("nodes = 100\nload_patch_radius = 0.025\n"), 0.0025, 1e-3)));
   EXPECT_EQ(warned(given), "");
-  EXPECT_DOUBLE_EQ(given.model.nets[0].load_patch_radius, 0.015);
+  EXPECT_DOUBLE_EQ(given.model.nets[0].load_patch_radius, 0.025);
 }
 
 // Grasping of tissue is kept (issue 67, "Keep what the organ has"): the default scene's recording

@@ -118,8 +118,11 @@ struct MaterialNetSettings {
 };
 
 /// The edges a load patch's radius spans at the coarsest net it is made for, so that the net
-/// resolves the patch's load.
-inline constexpr double kLoadPatchEdges = 2.0;
+/// resolves the patch's load. Three, not two: under a patch of two edges the finer nets' springs
+/// let their tetrahedra turn inside out once a 2.5 mm sphere pressed the shipped organ's lobe
+/// past 4 mm with b = 1, and nets of 500 to 10 000 nodes differed by 36 % of the finest's peak at
+/// 6 mm; with three, by at most 4.1 % (issue 67's figure 1; docs/tissue.md, "Why three edges").
+inline constexpr double kLoadPatchEdges = 3.0;
 
 /// The surface node count whose net the default load patch is made for (issue 67's figure 1:
 /// nets from 500 to 10 000 nodes feel alike).
