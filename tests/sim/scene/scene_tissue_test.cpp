@@ -206,10 +206,10 @@ TEST(SceneTissueErrors, ABadMaterialIsALocatedErrorAtItsKey) {
 // The shipped organ given by a material at three net sizes, a 2.5 mm sphere at 20 mm/s into its
 // convex face (the figure of docs/organs.md "Force against indentation"): the force rises with
 // depth to 3 mm at every size (at least 1.5 times the 1 mm force at 2 mm, 1.8 times at 3 mm: a
-// solid's force under a sphere rises at least linearly), and the 500-node net's is the 1 002-node
-// net's within 10 % (the load patch: docs/tissue.md, "The contact"; the 250-node net is coarser
-// than the patch is made for, and warned). Printed: the force at 1, 2 and 3 mm (docs/tissue.md
-// quotes them).
+// solid's force under a sphere rises at least linearly), and the 500- and 250-node nets' are the
+// 1 002-node net's within 10 % (the load patch: docs/tissue.md, "The contact"; measured within
+// 1.6 %, the 250-node net coarser than the 500 the patch is made for). Printed: the force at 1, 2
+// and 3 mm (docs/tissue.md quotes them).
 TEST(SceneTissue, TheShippedOrganWithAMaterialPushesBackHarderTheDeeper) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
@@ -228,7 +228,7 @@ TEST(SceneTissue, TheShippedOrganWithAMaterialPushesBackHarderTheDeeper) {
     EXPECT_GT(f2, 1.5 * f1) << nodes;
     EXPECT_GT(f3, 1.8 * f1) << nodes;
     if (nodes == 1002) at_1002 = {f1, f2, f3};
-    if (nodes == 500) {
+    if (nodes < 1002) {
       const double f[] = {f1, f2, f3};
       for (std::size_t k = 0; k < 3; ++k) {
         EXPECT_NEAR(f[k], at_1002[k], 0.10 * at_1002[k]) << k + 1 << " mm";
