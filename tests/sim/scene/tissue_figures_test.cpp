@@ -110,8 +110,9 @@ void tissue_write_mesh(int f, bool ellipsoid, const std::string& path) {
 /// slope over one period, about 0.5 N/mm at 20 µm, and curves within 5 % of each other's peak
 /// differ more in their slope; measured up to 5.0 % above, docs/tissue.md; a jump of the touched
 /// point was 3 times it). Past 5.5 mm the sphere has sunk 2 R into the net-carried surface (the
-/// law table's last knot) and a net's face contacts can come and go from one period to the next:
-/// up to 3 times the finest's change there, 0.06 N (printed; docs/tissue.md, "Figure 1").
+/// law table's last knot), its centre R below it at the edge of the contact search, and a net's
+/// face contacts can come and go from one period to the next: up to 3 times the finest's change
+/// there, 0.06 N (printed; docs/tissue.md, "The same feel at any net size").
 void tissue_convergence(const char* label, bool ellipsoid, const Vec3& from, double b) {
   TempDir dir;
   const std::string obj = (dir.path() / "organ.obj").string();
