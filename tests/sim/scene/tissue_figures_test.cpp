@@ -107,9 +107,9 @@ void tissue_write_mesh(int f, bool ellipsoid, const std::string& path) {
 /// finest's, over the finest's peak, and its largest period-to-period change. Checked: every net
 /// within 5 % of the finest's peak (issue 67), and to 5.5 mm no net's largest period-to-period
 /// change more than 10 % above the finest's (each net's largest change is its curve's steepest
-/// slope over one period, about 0.5 N/mm at 20 µm, and curves within 5 % of each other's peak
-/// differ more in their slope; measured up to 5.0 % above, docs/tissue.md; a jump of the touched
-/// point was 3 times it). Past 5.5 mm the sphere has sunk 2 R into the net-carried surface (the
+/// slope over one period of 20 µm, about 0.5 N/mm at b = 0 and 0.9 N/mm at b = 1, and curves
+/// within 5 % of each other's peak differ more in their slope; measured up to 1.3 % above,
+/// docs/tissue.md; a jump of the touched point was 3 times it). Past 5.5 mm the sphere has sunk 2 R into the net-carried surface (the
 /// law table's last knot), its centre R below it at the edge of the contact search, and a net's
 /// face contacts can come and go from one period to the next: up to 3 times the finest's change
 /// there, 0.06 N (printed; docs/tissue.md, "The same feel at any net size").
@@ -293,7 +293,8 @@ TEST(TissueFigures, TheIssuesEllipsoidOn2500NodesNeverJumps) {
 // a tied membrane, does not feel alike everywhere either: at the organ's middle, (0, 0), the
 // material organ is up to 15 % stiffer at 2.5–3 mm; printed, docs/tissue.md). Below 1 mm the
 // per-spring organ's penalty has taken up more force (printed from 0.5 mm). Without the stiffening
-// (b = 0, a neo-Hookean solid) no E keeps the first point within 10 % past 4 mm (docs/tissue.md).
+// (b = 0, a neo-Hookean solid) no E kept the first point within 10 % past 4 mm (measured with the
+// load patch of two edges, docs/tissue.md).
 TEST(TissueFigures, TheShippedOrganWithItsMaterialKeepsItsFeel) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
