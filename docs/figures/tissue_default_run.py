@@ -26,7 +26,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SCENES = os.path.join(ROOT, "sim", "scenes")
 MATERIAL_KEYS = ("youngs_modulus_kpa", "poisson_ratio", "density", "rayleigh_stiffness",
                  "support_length", "strain_stiffening", "load_patch_radius", "nodes")
-# sim/scenes/default.toml's organ before issue 67 (docs/organs.md, "Organs").
+# sim/scenes/default.toml's organ before issue 67 (docs/organs.md, "Organs"); the same as the stability
+# grid's kShippedPerSpringOrgan (sim/include/numen/sim/study/study_stability_cases.hpp).
 PER_SPRING = {"mass": 0.07, "stiffness": 200.0, "damping": 0.1, "bending_stiffness": 50.0,
               "bending_damping": 0.03, "tie_stiffness": 100.0, "tie_damping": 0.17}
 FIGURES = ("step_time_median_us", "step_time_p99_us", "solver_iterations_mean",

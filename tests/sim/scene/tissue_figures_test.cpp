@@ -299,9 +299,14 @@ TEST(TissueFigures, TheShippedOrganWithItsMaterialKeepsItsFeel) {
   NUMEN_REQUIRE_DEFORMABLE();
   TempDir dir;
   const std::string file = "mesh = \"file\"\nfile = \"" + std::string(NUMEN_SOURCE_DIR) + "/sim/data/organ_lobe.obj\"\n";
-  const std::string per_spring = file +
-      "mass = 0.07\nstiffness = 200.0\ndamping = 0.1\nbending_stiffness = 50.0\nbending_damping = 0.03\n"
-      "tie_stiffness = 100.0\ntie_damping = 0.17\n";
+  const numen::sim::stability::PerSpringOrgan& k = numen::sim::stability::kShippedPerSpringOrgan;
+  char spring_keys[256];
+  std::snprintf(spring_keys, sizeof spring_keys,
+                "mass = %.17g\nstiffness = %.17g\ndamping = %.17g\nbending_stiffness = %.17g\n"
+                "bending_damping = %.17g\ntie_stiffness = %.17g\ntie_damping = %.17g\n",
+                k.mass, k.stiffness, k.damping, k.bending_stiffness, k.bending_damping, k.tie_stiffness,
+                k.tie_damping);
+  const std::string per_spring = file + spring_keys;
   const core::NetMaterial& m = numen::sim::stability::kShippedOrganMaterial;
   char material_keys[256];
   std::snprintf(material_keys, sizeof material_keys,
