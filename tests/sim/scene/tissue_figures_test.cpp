@@ -109,10 +109,10 @@ void tissue_write_mesh(int f, bool ellipsoid, const std::string& path) {
 /// change more than 10 % above the finest's (each net's largest change is its curve's steepest
 /// slope over one period of 20 µm, about 0.5 N/mm at b = 0 and 0.9 N/mm at b = 1, and curves
 /// within 5 % of each other's peak differ more in their slope; measured up to 1.3 % above,
-/// docs/tissue.md; a jump of the touched point was 3 times it). Past 5.5 mm the sphere has sunk 2 R into the net-carried surface (the
-/// law table's last knot), its centre R below it at the edge of the contact search, and a net's
-/// face contacts can come and go from one period to the next: up to 3 times the finest's change
-/// there, 0.06 N (printed; docs/tissue.md, "The same feel at any net size").
+/// docs/tissue.md; a jump of the touched point was 3 times it). Past 5.5 mm the sphere is 1.4–1.9 R deep in the fine surface and its
+/// deepest face contact can slide off its triangle with no edge contact taken in its place: up
+/// to 3 times the finest's change there, 0.06 N (printed; checked at 0.1 N; docs/tissue.md, "The
+/// same feel at any net size").
 void tissue_convergence(const char* label, bool ellipsoid, const Vec3& from, double b) {
   TempDir dir;
   const std::string obj = (dir.path() / "organ.obj").string();
