@@ -182,7 +182,7 @@ void tissue_convergence(const char* label, bool ellipsoid, const Vec3& from, dou
 static void block_against_reference(const char* csv, double b, double depth_max, double checked_to) {
   TempDir dir;
   const auto reference = tissue_block_reference(csv);
-  ASSERT_FALSE(reference.empty());
+  ASSERT_FALSE(reference.empty()) << "docs/figures/" << csv << " is missing or has no row (a tracked file)";
   const Vec3 down(0, 0, -1);
   const Vec3 from(0.0, 0.0, 0.015 + 0.005 + 0.0005);  // 0.5 mm above the block's top face
   const double depths[] = {0.1, 0.2, 0.3, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0};
