@@ -10,10 +10,12 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "net_states.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_forces.hpp"
 #include "numen/core/net_material.hpp"
 #include "numen/core/step.hpp"
 #include "octahedron_net.hpp"
@@ -41,6 +43,17 @@ core::NetMaterial liver() {
 core::Model octahedron_model(const core::NetMaterial& tissue, core::MaterialNetConstants* c,
                              std::string* err) {
   return numen::test::octahedron_material_model(tissue, c, err);
+}
+
+/// octahedron_model() of liver() with its materials, alone (no device): a model finalize_model()
+/// takes; `err` says why add_material_net() refused it.
+core::Model octahedron_organ(std::string* err) {
+  core::MaterialNetConstants c;
+  core::Model m = octahedron_model(liver(), &c, err);
+  m.material_names = {"tissue"};
+  m.material_pairs.assign(1, core::MaterialPair{2e4, 10.0, 0.0});
+  m.initial_held_body = -1;  // the organ alone: no device
+  return m;
 }
 
 }  // namespace
@@ -194,13 +207,9 @@ TEST(NetMaterial, ABadTetrahedralMeshIsRefusedNamingTheElement) {
 // contact modulus needs a patch radius and a normal per surface area; ties per node need an
 // anchored rigid component (the solve's tie sums of a moving one take every tie alike).
 TEST(NetMaterial, FinalizeRefusesAnInconsistentTissueNet) {
-  core::MaterialNetConstants c;
   std::string err;
-  core::Model good = octahedron_model(liver(), &c, &err);
+  const core::Model good = octahedron_organ(&err);
   ASSERT_EQ(err, "");
-  good.material_names = {"tissue"};
-  good.material_pairs.assign(1, core::MaterialPair{2e4, 10.0, 0.0});
-  good.initial_held_body = -1;  // the organ alone: no device
   {
     core::Model m = good;
     EXPECT_EQ(core::finalize_model(m), "");
@@ -234,6 +243,58 @@ TEST(NetMaterial, FinalizeRefusesAnInconsistentTissueNet) {
     core::Model m = good;
     m.nets[0].tie_scale.pop_back();
     EXPECT_NE(core::finalize_model(m).find("one entry per node"), std::string::npos);
+  }
+}
+
+// The net keeps its tetrahedra (Model::net_tetrahedra), each ordered to a positive volume at rest,
+// and measure_nets() counts those turned inside out (NetOutput::inverted_tetrahedra): none at
+// rest; with the centre node moved 1.5 r up, past the apex, the four tetrahedra on the upper faces
+// (their centre now beyond those faces' planes) and not the lower four; a flat one (the centre on
+// an upper face's plane, at the apex) counts, as a non-finite node does. finalize_model() refuses
+// a tetrahedron wound negative at rest or naming a node of no net of its own.
+TEST(NetMaterial, MeasureCountsTheTetrahedraTurnedInsideOut) {
+  std::string err;
+  core::Model m = octahedron_organ(&err);
+  ASSERT_EQ(err, "");
+  ASSERT_EQ(core::finalize_model(m), "");
+  ASSERT_EQ(m.nets[0].tetrahedron_count, 8);  // the centre and each of the 8 faces
+  ASSERT_EQ(m.net_tetrahedra.size(), 8u);
+  core::Data d = core::make_data(m);
+  for (int i = 0; i < m.num_nodes(); ++i) d.nodes[static_cast<std::size_t>(i)].position = m.node_rest[static_cast<std::size_t>(i)];
+  core::measure_nets(m, d);
+  EXPECT_EQ(d.nets[0].inverted_tetrahedra, 0);
+  // The centre node: the one at the origin (numen::test::octahedron_volume()).
+  int centre = -1;
+  for (int i = 0; i < m.num_nodes(); ++i)
+    if (m.node_rest[static_cast<std::size_t>(i)].norm() < 1e-12) centre = i;
+  ASSERT_GE(centre, 0);
+  auto& x = d.nodes[static_cast<std::size_t>(centre)].position;
+  x = Vec3(0.0, 0.0, 0.015);  // 1.5 r up: past the apex (0, 0, r)
+  core::measure_nets(m, d);
+  EXPECT_EQ(d.nets[0].inverted_tetrahedra, 4);
+  x = Vec3(0.0, 0.0, 0.005);  // half way: inside
+  core::measure_nets(m, d);
+  EXPECT_EQ(d.nets[0].inverted_tetrahedra, 0);
+  x = Vec3(0.0, 0.0, 0.01);  // on the apex: the four upper tetrahedra flat
+  core::measure_nets(m, d);
+  EXPECT_EQ(d.nets[0].inverted_tetrahedra, 4);
+  x = Vec3(std::nan(""), 0.0, 0.0);  // not finite: every tetrahedron at the centre
+  core::measure_nets(m, d);
+  EXPECT_EQ(d.nets[0].inverted_tetrahedra, 8);
+  {
+    core::Model bad = m;
+    std::swap(bad.net_tetrahedra[3][0], bad.net_tetrahedra[3][1]);
+    EXPECT_NE(core::finalize_model(bad).find("tetrahedron 3 needs a positive volume at rest"), std::string::npos);
+  }
+  {
+    core::Model bad = m;
+    bad.net_tetrahedra[0][0] = m.num_nodes();
+    EXPECT_NE(core::finalize_model(bad).find("tetrahedron 0 names a node outside the net"), std::string::npos);
+  }
+  {
+    core::Model bad = m;
+    bad.net_tetrahedra.pop_back();
+    EXPECT_NE(core::finalize_model(bad).find("tetrahedron range beyond"), std::string::npos);
   }
 }
 

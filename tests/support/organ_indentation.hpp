@@ -272,6 +272,8 @@ inline double organ_force_on_tool(const core::Data& d, const Vec3& dir) {
 struct IndentationSample {
   double depth = 0.0;  ///< m: how far the tool has gone past its first touch of the rest shape.
   double force = 0.0;  ///< N: organ_force_on_tool(), the mean over the sample's steps.
+  /// Net 0's tetrahedra inside out at the sample's last step (core::NetOutput::inverted_tetrahedra).
+  int inverted_tetrahedra = 0;
 };
 
 /// Pushes the imposed tool (a kDirect model of organ_model()) from `from` along unit `dir` at
@@ -304,7 +306,7 @@ inline std::vector<IndentationSample> indentation_curve(
     EXPECT_EQ(d.status, core::kStepOk) << "step " << k;
     window += organ_force_on_tool(d, dir);
     if (k % every == 0) {
-      out.push_back({s - touch, window / (k == 0 ? 1 : every)});
+      out.push_back({s - touch, window / (k == 0 ? 1 : every), d.nets.empty() ? 0 : d.nets[0].inverted_tetrahedra});
       window = 0.0;
     }
   }

@@ -103,7 +103,7 @@ ModelFootprint model_footprint(const Model& m) noexcept {
   f.groups[2] = {"joints", heap(m.joints, t.nodes, t.body_node, t.joint_node, t.body_tree)};
   f.groups[3] = {"nets", heap(m.nets, m.net_springs, m.node_rest, m.node_mass, m.node_radius,
                               m.node_net, m.node_sweep_order, m.node_spring_begin, m.node_springs,
-                              m.net_faces, m.net_surface_points, m.net_surface_faces,
+                              m.net_faces, m.net_tetrahedra, m.net_surface_points, m.net_surface_faces,
                               m.net_face_surface_begin, m.net_face_surface_faces,
                               m.net_face_surface_cluster, m.net_surface_clusters)};
   std::size_t meshes = heap(m.meshes);

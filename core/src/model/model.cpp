@@ -42,6 +42,7 @@ std::string validate_nets(const Model& model) {
   int next_node = 0;
   int next_spring = 0;
   int next_face = 0;
+  int next_tetrahedron = 0;
   for (int k = 0; k < model.num_nets(); ++k) {
     const NetModel& net = model.nets[static_cast<std::size_t>(k)];
     const std::string who = "net '" + net.name + "'";
@@ -79,6 +80,9 @@ std::string validate_nets(const Model& model) {
     next_node += net.node_count;
     next_spring += net.structural_count + net.bending_count;
     next_face += net.face_count;
+    if (net.tetrahedron_begin != next_tetrahedron || net.tetrahedron_count < 0)
+      return who + ": tetrahedron range must follow the previous net's";
+    next_tetrahedron += net.tetrahedron_count;
     for (int i = net.node_begin; i < next_node; ++i) {
       const auto u = static_cast<std::size_t>(i);
       if (model.node_net[u] != k || !finite(model.node_rest[u]) || !(model.node_mass[u] > 0.0) ||
@@ -105,11 +109,23 @@ std::string validate_nets(const Model& model) {
       if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
         return who + ": face " + std::to_string(f - net.face_begin) + " repeats a node";
     }
+    for (int e = net.tetrahedron_begin; e < next_tetrahedron; ++e) {
+      if (e >= static_cast<int>(model.net_tetrahedra.size()))
+        return who + ": tetrahedron range beyond Model::net_tetrahedra";
+      const auto& t = model.net_tetrahedra[static_cast<std::size_t>(e)];
+      const std::string which = who + ": tetrahedron " + std::to_string(e - net.tetrahedron_begin);
+      for (int v : t)
+        if (v < net.node_begin || v >= next_node) return which + " names a node outside the net";
+      const auto rest = [&](int m) -> const Vec3& { return model.node_rest[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])]; };
+      if (!((rest(1) - rest(0)).cross(rest(2) - rest(0)).dot(rest(3) - rest(0)) > 0.0))
+        return which + " needs a positive volume at rest (its nodes ordered so)";
+    }
   }
   if (next_node != static_cast<int>(n) ||
       next_spring != static_cast<int>(model.net_springs.size()) ||
-      next_face != static_cast<int>(model.net_faces.size()))
-    return "nets: node, spring or face arrays hold entries no net owns";
+      next_face != static_cast<int>(model.net_faces.size()) ||
+      next_tetrahedron != static_cast<int>(model.net_tetrahedra.size()))
+    return "nets: node, spring, face or tetrahedron arrays hold entries no net owns";
   return "";
 }
 

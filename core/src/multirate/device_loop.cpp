@@ -102,6 +102,7 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
   m.nets.clear();
   m.net_springs.clear();
   m.net_faces.clear();
+  m.net_tetrahedra.clear();
   m.node_rest.clear();
   m.node_mass.clear();
   m.node_radius.clear();

@@ -354,6 +354,18 @@ void measure_nets(const Model& model, Data& data) noexcept {
       raise_max(ratio2_max, ratio2);
       if (ratio2 < ratio2_min) ratio2_min = ratio2;
     }
+    // The watched tetrahedra (well shaped at rest) turned inside out, flat or not finite:
+    // 6 V = (x1 − x0) × (x2 − x0) · (x3 − x0).
+    int inverted = 0;
+    for (int e = net.tetrahedron_begin; e < net.tetrahedron_begin + net.tetrahedron_count; ++e) {
+      const std::array<int, 4>& t = model.net_tetrahedra[static_cast<std::size_t>(e)];
+      const Vec3& x0 = data.nodes[static_cast<std::size_t>(t[0])].position;
+      const double six_v = (data.nodes[static_cast<std::size_t>(t[1])].position - x0)
+                               .cross(data.nodes[static_cast<std::size_t>(t[2])].position - x0)
+                               .dot(data.nodes[static_cast<std::size_t>(t[3])].position - x0);
+      inverted += six_v > 0.0 ? 0 : 1;
+    }
+    out.inverted_tetrahedra = inverted;
     out.max_tie_stretch = std::sqrt(stretch2);
     out.max_node_speed = std::sqrt(speed2);
     out.kinetic_energy = kinetic;

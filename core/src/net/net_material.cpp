@@ -5,9 +5,11 @@
 #include "numen/core/net_material.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <utility>
+#include <vector>
 
 #include "numen/core/model.hpp"
 #include "numen/core/net_tissue_contact.hpp"
@@ -233,10 +235,30 @@ double set_contact_constants(const TriangleMesh& surface, const MaterialNetSetti
   return edge_sum / (3.0 * std::max(1, surface.num_triangles()));
 }
 
-/// The net's nodes, springs and outward-wound triangles appended to the model, the net last.
+/// The tetrahedra whose inversion the net reports (kInversionWatchQuality), as global node
+/// indices from `node_begin`, each ordered to a positive volume at rest (lump_volumes() refused
+/// a flat one).
+std::vector<std::array<int, 4>> watched_tetrahedra(const TetrahedralMesh& mesh, int node_begin) {
+  std::vector<std::array<int, 4>> out;
+  for (const auto& q : mesh.tetrahedra) {
+    const Vec3 &a = mesh.node(q[0]), &b = mesh.node(q[1]), &c = mesh.node(q[2]), &d = mesh.node(q[3]);
+    const double l_max = std::sqrt(std::max({(b - a).squaredNorm(), (c - a).squaredNorm(), (d - a).squaredNorm(),
+                                             (c - b).squaredNorm(), (d - b).squaredNorm(), (d - c).squaredNorm()}));
+    const double v = signed_volume(a, b, c, d);
+    if (!(6.0 * std::sqrt(2.0) * std::abs(v) >= kInversionWatchQuality * l_max * l_max * l_max)) continue;
+    std::array<int, 4> t{node_begin + q[0], node_begin + q[1], node_begin + q[2], node_begin + q[3]};
+    if (v < 0.0) std::swap(t[2], t[3]);
+    out.push_back(t);
+  }
+  return out;
+}
+
+/// The net's nodes, springs, outward-wound triangles and `watched` tetrahedra appended to the
+/// model, the net last.
 void append_material_net(Model& model, const TetrahedralMesh& mesh, NetModel&& net,
                          const std::vector<NetSpring>& springs, const std::vector<double>& mass,
-                         const std::vector<double>& radius, double enclosed) {
+                         const std::vector<double>& radius, double enclosed,
+                         const std::vector<std::array<int, 4>>& watched) {
   const int net_index = model.num_nets();
   for (int i = 0; i < mesh.num_nodes(); ++i) {
     model.node_rest.push_back(mesh.node(i));
@@ -245,6 +267,7 @@ void append_material_net(Model& model, const TetrahedralMesh& mesh, NetModel&& n
     model.node_net.push_back(net_index);
   }
   model.net_springs.insert(model.net_springs.end(), springs.begin(), springs.end());
+  model.net_tetrahedra.insert(model.net_tetrahedra.end(), watched.begin(), watched.end());
   for (const auto& t : mesh.surface.triangles)
     model.net_faces.push_back(enclosed < 0.0
                                   ? std::array<int, 3>{net.node_begin + t[0], net.node_begin + t[2],
@@ -305,6 +328,9 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
   const double enclosed = enclosed_volume_sign(mesh.surface);  // wound outward as add_net() does
   net.face_begin = static_cast<int>(model.net_faces.size());
   net.face_count = mesh.surface.num_triangles();
+  const std::vector<std::array<int, 4>> watched = watched_tetrahedra(mesh, net.node_begin);
+  net.tetrahedron_begin = static_cast<int>(model.net_tetrahedra.size());
+  net.tetrahedron_count = static_cast<int>(watched.size());
   const double mean_edge = set_contact_constants(mesh.surface, settings, enclosed, net);
 
   if (constants) {
@@ -325,7 +351,7 @@ std::string add_material_net(Model& model, const TetrahedralMesh& mesh,
     constants->load_patch_radius = net.load_patch_radius;
     constants->surface_mean_edge = mean_edge;
   }
-  append_material_net(model, mesh, std::move(net), springs.springs, mass, radius, enclosed);
+  append_material_net(model, mesh, std::move(net), springs.springs, mass, radius, enclosed, watched);
   return "";
 }
 

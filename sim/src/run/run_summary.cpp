@@ -237,6 +237,15 @@ RunSummary SceneRunner::summary() const {
   s.rejected_causes = rejection_causes(device_.counters());
   s.contact_clamped_steps = data_.contact_clamped_steps;
   s.net_crossed_steps = data_.net_crossed_steps;
+  if (s.net_inverted_tetrahedra_max > 0) {
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(3) << "organ '" << s.net_first_inversion_net
+       << "': its net turned tetrahedra inside out, the first at " << s.net_first_inversion_s
+       << " s, up to " << s.net_inverted_tetrahedra_max
+       << " at once: its springs do not resist it, and the force there is no longer the tissue's "
+          "(a finer net, a larger load_patch_radius or a lighter load; docs/tissue.md, \"Inversion\")";
+    s.warnings.push_back(os.str());
+  }
   s.crossed_contact_steps = data_.crossed_contact_steps;
   s.pass_throughs = data_.pass_throughs;
   if (s.pass_throughs > 0) {

@@ -135,6 +135,9 @@ constexpr RunSummarySegment kLayout[] = {
      "{net_crossed_steps} scene steps (multirate: those contacts dropped, their depth in the net "
      "penetration max; docs/organs.md, \"Organs in multirate\")\n",
      set("net_crossed_steps")},
+    {"  deformable: up to {net_inverted_tetrahedra_max} tetrahedra of an organ given by its material "
+     "inside out at once (see the warning)\n",
+     set("net_inverted_tetrahedra_max")},
     {"  contacts max {contacts_max}, overflow steps {contact_overflow}, solver iterations mean "
      "{solver_iterations_mean}, max {solver_iterations_max}, residual max "
      "{solver_residual_max:e2}, not converged {solver_not_converged_steps} steps\n"},

@@ -168,9 +168,11 @@ StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h
   const std::int64_t at = std::max<std::int64_t>(1, std::llround(0.05 / h));
   Monitor monitor(limits, limits.penetration_factor * static_depth, kInf, n,
                   model.bodies[1].mass, h);
+  int inverted_max = 0;  // the most tetrahedra inside out after a step (NetOutput)
   drive(
       model, data, n,
       [&](std::int64_t k, core::Data& d) noexcept {
+        inverted_max = std::max(inverted_max, d.nets[0].inverted_tetrahedra);
         d.target.position = k >= at ? goal : start;
         d.target.orientation = core::Quat::Identity();
         d.target_twist = core::Twist{};
@@ -181,12 +183,13 @@ StabilityRow organ_run(const Scene& scene, core::Integrator integrator, double h
                model.bodies[1].mass, model.nets[0].tie_stiffness, jump, "jump_m", kNaN);
   r.energy_ratio_max = kNaN;
   monitor.fill(r);
-  char note[200];
+  inverted_max = std::max(inverted_max, data.nets[0].inverted_tetrahedra);
+  char note[256];
   std::snprintf(note, sizeof note,
                 "at the end: %d node contacts, organ %.3g mm from its rest shape, max strain %.3g, "
-                "tool %.3g mm past the rest surface",
+                "tool %.3g mm past the rest surface; tetrahedra inside out at most %d",
                 data.num_node_contacts, 1e3 * data.nets[0].max_tie_stretch, data.nets[0].max_strain,
-                1e3 * (data.bodies[1].position - start).dot(axis) - 20.0);
+                1e3 * (data.bodies[1].position - start).dot(axis) - 20.0, inverted_max);
   r.note = note;
   return r;
 }

@@ -83,6 +83,9 @@ inline sim::RunSummary full_managed_summary() {
   s.net_tie_stretch_max_mm = 1.75;
   s.net_strain_max = 0.125;
   s.net_node_speed_max_mps = 0.0625;
+  s.net_inverted_tetrahedra_max = 3;
+  s.net_first_inversion_s = 9.85;
+  s.net_first_inversion_net = "organ";
   s.nan_detected = true;
   s.nonfinite_steps = 14;
   s.invalid_target_steps = 3;

@@ -472,6 +472,7 @@ TEST(SceneTissue, TheDefaultRecordingGraspsAnOrganGivenByItsMaterial) {
   EXPECT_EQ(s.grasps_started, 2);
   EXPECT_EQ(s.grasps_released, 2);
   EXPECT_EQ(s.grasps_slipped, 0);
+  EXPECT_EQ(s.net_inverted_tetrahedra_max, 0) << "the grasp turned tetrahedra inside out";
   ASSERT_EQ(s.grasp_events.size(), 4u);
   const double times[] = {6.968, 7.026, 7.824, 8.913};  // the per-spring organ's
   for (std::size_t i = 0; i < 4; ++i) {
@@ -485,4 +486,46 @@ TEST(SceneTissue, TheDefaultRecordingGraspsAnOrganGivenByItsMaterial) {
     ASSERT_NE(at, std::string::npos) << s.grasp_events[i];
     EXPECT_GT(std::stod(s.grasp_events[i].substr(at + 5)), 0.1) << s.grasp_events[i];
   }
+}
+
+// A net that turns tetrahedra inside out says so (core::NetOutput::inverted_tetrahedra; docs/tissue.md,
+// "Inversion"): the default recording on the shipped organ with a load patch of 2 mm (ρ = 13.5 mm
+// as shipped) turns up to 2 of its 1 694 watched tetrahedra inside out at once (3 over the whole
+// 30 s), the first at 9.85 s —
+// the summary's figure, the time, the organ, and a warning that names it; as shipped, over the
+// same 10.5 s, none and no warning. The run's exit status is the same (a warning, not a failure).
+TEST(SceneTissue, ANetThatTurnsTetrahedraInsideOutIsWarned) {
+  NUMEN_REQUIRE_ARTICULATION();
+  NUMEN_REQUIRE_DEFORMABLE();
+  TempDir dir;
+  const std::string shipped = numen::test::shipped_scene_text_anywhere("default.toml");
+  const std::string key = "strain_stiffening = 1.0";
+  const std::size_t at = shipped.find(key);
+  ASSERT_NE(at, std::string::npos) << "default.toml's organ no longer has its strain_stiffening";
+  std::string small = shipped;
+  small.insert(at, "load_patch_radius = 0.002\n");
+  numen::sim::RunOptions opt;
+  opt.duration_s = 10.5;
+  const Scene patched = load_scene(dir.write("small_patch.toml", small));
+  ASSERT_NEAR(patched.model.nets[0].load_patch_radius, 0.002, 1e-12);
+  const numen::sim::RunSummary s = numen::sim::run_scene(patched, opt);
+  EXPECT_FALSE(s.nan_detected);
+  EXPECT_EQ(s.exit_status, 0);
+  EXPECT_GE(s.net_inverted_tetrahedra_max, 1);
+  EXPECT_GT(s.net_first_inversion_s, 5.0);
+  EXPECT_LT(s.net_first_inversion_s, 10.5);
+  EXPECT_EQ(s.net_first_inversion_net, "organ");
+  std::string warned;
+  for (const std::string& w : s.warnings)
+    if (w.find("turned tetrahedra inside out") != std::string::npos) warned = w;
+  EXPECT_NE(warned.find("organ 'organ'"), std::string::npos) << warned;
+  EXPECT_NE(warned.find("up to " + std::to_string(s.net_inverted_tetrahedra_max) + " at once"), std::string::npos)
+      << warned;
+  std::printf("[   info   ] load patch 2 mm: %s\n", warned.c_str());
+  const numen::sim::RunSummary as_shipped = numen::sim::run_scene(load_scene(dir.write("default.toml", shipped)), opt);
+  EXPECT_EQ(as_shipped.exit_status, 0);
+  EXPECT_EQ(as_shipped.net_inverted_tetrahedra_max, 0);
+  EXPECT_LT(as_shipped.net_first_inversion_s, 0.0);
+  for (const std::string& w : as_shipped.warnings)
+    EXPECT_EQ(w.find("inside out"), std::string::npos) << w;
 }

@@ -139,12 +139,21 @@ void tissue_convergence(const char* label, bool ellipsoid, const Vec3& from, dou
     }
     jumps.push_back(jump);
     jumps_55.push_back(jump_55);
+    int inverted = 0;  // the most tetrahedra inside out at once, and from what depth
+    double inverted_from = -1.0;
+    for (const auto& sample : curves.back()) {
+      inverted = std::max(inverted, sample.inverted_tetrahedra);
+      if (sample.inverted_tetrahedra > 0 && inverted_from < 0.0) inverted_from = sample.depth;
+    }
     std::printf("[tissue figure 1] %s, b %g, %d nodes (%d in all, patch %.2f mm): force at 1 / 2 / 4 / 6 mm "
-                "%.3f / %.3f / %.3f / %.3f N, largest step-to-step change %.4f N (at %.2f mm), to 5.5 mm %.4f N\n",
+                "%.3f / %.3f / %.3f / %.3f N, largest step-to-step change %.4f N (at %.2f mm), to 5.5 mm %.4f N; "
+                "tetrahedra inside out at most %d of the %d watched",
                 label, b, nodes, s.model.nets[0].node_count, 1e3 * s.model.nets[0].load_patch_radius,
                 tissue_force_at(curves.back(), 0.001), tissue_force_at(curves.back(), 0.002),
                 tissue_force_at(curves.back(), 0.004), tissue_force_at(curves.back(), 0.006), jump,
-                1e3 * jump_at, jump_55);
+                1e3 * jump_at, jump_55, inverted, s.model.nets[0].tetrahedron_count);
+    if (inverted > 0) std::printf(" (from %.2f mm)", 1e3 * inverted_from);
+    std::printf("\n");
   }
   const auto finest = organ::block_means(curves.back(), 5);
   double peak = 0.0;

@@ -259,6 +259,14 @@ struct Model {
   /// normal (x1 − x0) × (x2 − x0); add_net() turns a mesh that encloses a negative volume).
   /// An organ's contacts with the tool are against them (net_surface.hpp).
   std::vector<std::array<int, 3>> net_faces;
+  /// Tetrahedra of the nets given by their material (net_material.hpp; per net
+  /// NetModel::tetrahedron_begin/count, empty for a net given per spring): those of the
+  /// tetrahedral mesh well shaped at rest (kInversionWatchQuality; not the slivers) as global
+  /// node indices, ordered so that each has a positive signed volume
+  /// (x1 − x0) × (x2 − x0) · (x3 − x0) / 6 at rest. The net's springs do not keep them from
+  /// turning inside out: measure_nets() counts those whose volume is not positive at a step's
+  /// end (NetOutput::inverted_tetrahedra; docs/tissue.md, "Inversion").
+  std::vector<std::array<int, 4>> net_tetrahedra;
   /// Fine surfaces mapped onto nets (net_surface_map.hpp, add_net_surface()): every fine
   /// vertex's embedding on a net triangle, per net NetModel::surface_point_begin/count.
   std::vector<NetSurfacePoint> net_surface_points;

@@ -56,7 +56,10 @@ void integrate_nodes_implicit(const Model& model, Data& data) noexcept;
 
 /// End-of-step observables of every net into Data::nets (NetOutput):
 /// largest tie stretch |x − a| against the rigid component's end pose,
-/// largest structural strain, kinetic energy, largest node speed. Sets its bit
+/// largest structural strain, kinetic energy, largest node speed, and for a net given by its
+/// material its tetrahedra well shaped at rest whose signed volume is not positive
+/// (NetOutput::inverted_tetrahedra; one pass over Model::net_tetrahedra, 4 positions and a
+/// triple product each). Sets its bit
 /// of Data::stages_run (kStageMeasureNets, step_stages.hpp).
 void measure_nets(const Model& model, Data& data) noexcept;
 

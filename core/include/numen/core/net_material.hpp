@@ -124,6 +124,16 @@ struct MaterialNetSettings {
 /// 6 mm; with three, by at most 4.1 % (issue 67's figure 1; docs/tissue.md, "Why three edges").
 inline constexpr double kLoadPatchEdges = 3.0;
 
+/// The least quality q = 6√2 V / l_max³ at rest (1 for the regular tetrahedron, 0 for a flat
+/// one; V its volume, l_max its longest edge) of a tetrahedron whose turning inside out the
+/// net reports (Model::net_tetrahedra, NetOutput::inverted_tetrahedra). Below it are the
+/// mesher's slivers — on the shipped organ's 500-node net 264 of 1 955, every one of the 193
+/// made of four surface nodes among them — which turn over as soon as the surface under a
+/// dimple bends the other way (the default recording turned up to 6 of q ≤ 0.03 over; figure
+/// 1's nets turned slivers of q < 0.06 over from 0.2 mm, and tetrahedra of q = 0.14–0.35 only
+/// deep; docs/tissue.md, "Inversion").
+inline constexpr double kInversionWatchQuality = 0.1;
+
 /// The surface node count whose net the default load patch is made for (issue 67's figure 1:
 /// nets from 500 to 10 000 nodes feel alike).
 inline constexpr int kLoadPatchCoarsestNodes = 500;

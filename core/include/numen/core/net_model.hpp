@@ -45,6 +45,10 @@ struct NetModel {
   int bending_count = 0;
   int face_begin = 0;  ///< First of the net's triangles in Model::net_faces.
   int face_count = 0;  ///< The mesh's triangles (0 for a net built by hand without faces).
+  /// The net's tetrahedra watched for inversion in Model::net_tetrahedra (a net given by its
+  /// material: those well shaped at rest; count 0 for one given per spring).
+  int tetrahedron_begin = 0;
+  int tetrahedron_count = 0;
   /// The fine surface mapped on the net (add_net_surface(), net_surface_map.hpp): its vertices
   /// [surface_point_begin, + surface_point_count) of Model::net_surface_points, its triangles
   /// [surface_face_begin, + surface_face_count) of Model::net_surface_faces. Counts 0 without

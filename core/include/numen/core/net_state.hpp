@@ -99,6 +99,12 @@ struct NodeContact {
 struct NetOutput {
   double max_tie_stretch = 0.0;    ///< Largest |x − a| of a node from its rest position (m), step's end.
   double max_strain = 0.0;         ///< Largest |l − L|/L of a structural spring, step's end.
+  /// A net given by its material: its tetrahedra well shaped at rest (Model::net_tetrahedra; not
+  /// the mesher's slivers, kInversionWatchQuality) whose signed volume is not positive at the
+  /// step's end — turned inside out, flat, or not finite (0 for a net given per spring). Its
+  /// central springs do not resist the turn, and the force the tool feels there is no longer
+  /// the tissue's (docs/tissue.md, "Inversion").
+  int inverted_tetrahedra = 0;
   double kinetic_energy = 0.0;     ///< Σ ½ m |v|² of the nodes, step's end (J).
   double max_node_speed = 0.0;     ///< Largest |v| of a node, step's end (m/s).
   /// The net's mechanical energy at the step's start (J), from the forces stage's own terms:

@@ -324,6 +324,13 @@ struct RunSummary {
   double net_tie_stretch_max_mm = 0.0;  ///< Largest |x − a| of a node from its rest position (mm).
   double net_strain_max = 0.0;  ///< Largest |l − L|/L of a structural spring (dimensionless).
   double net_node_speed_max_mps = 0.0;  ///< Fastest node (m/s).
+  /// An organ given by its material: most of its tetrahedra turned inside out (or flat) at a
+  /// step's end (core::NetOutput::inverted_tetrahedra), over the run and the nets; the first
+  /// time any was (s, −1: never) and that net's name. Any is a warning (docs/tissue.md,
+  /// "Inversion").
+  std::int64_t net_inverted_tetrahedra_max = 0;
+  double net_first_inversion_s = -1.0;
+  std::string net_first_inversion_net;
   bool nan_detected = false;
   std::int64_t nonfinite_steps = 0;
   /// Steps whose device target was not finite (core::Data::invalid_target_steps): coupling
