@@ -488,12 +488,12 @@ TEST(SceneTissue, TheDefaultRecordingGraspsAnOrganGivenByItsMaterial) {
   }
 }
 
-// A net that turns tetrahedra inside out says so (core::NetOutput::inverted_tetrahedra; docs/tissue.md,
-// "Inversion"): the default recording on the shipped organ with a load patch of 2 mm (ρ = 13.5 mm
-// as shipped) turns up to 2 of its 1 694 watched tetrahedra inside out at once (3 over the whole
-// 30 s), the first at 9.85 s —
-// the summary's figure, the time, the organ, and a warning that names it; as shipped, over the
-// same 10.5 s, none and no warning. The run's exit status is the same (a warning, not a failure).
+// A net that turns tetrahedra inside out says so (core::NetOutput::inverted_tetrahedra;
+// docs/tissue.md, "Inversion"): the default recording on the shipped organ with a load patch of
+// 2 mm (ρ = 13.5 mm as shipped) turns up to 2 of its 1 694 watched tetrahedra inside out at once
+// in 10.5 s (3 over the whole 30 s), the first at 9.85 s — the summary's figure, the time, the
+// organ, and a warning that names it; as shipped, over the same 10.5 s, none and no warning. The
+// run's exit status is the same (a warning, not a failure).
 TEST(SceneTissue, ANetThatTurnsTetrahedraInsideOutIsWarned) {
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_REQUIRE_DEFORMABLE();
