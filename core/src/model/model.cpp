@@ -10,6 +10,7 @@
 
 #include "numen/core/collision.hpp"
 #include "numen/core/features.hpp"
+#include "numen/core/net_material.hpp"
 #include "numen/core/net_model.hpp"
 #include "numen/core/net_tissue_contact.hpp"
 #include "numen/core/step_stages.hpp"
@@ -117,7 +118,7 @@ std::string validate_nets(const Model& model) {
       for (int v : t)
         if (v < net.node_begin || v >= next_node) return which + " names a node outside the net";
       const auto rest = [&](int m) -> const Vec3& { return model.node_rest[static_cast<std::size_t>(t[static_cast<std::size_t>(m)])]; };
-      if (!((rest(1) - rest(0)).cross(rest(2) - rest(0)).dot(rest(3) - rest(0)) > 0.0))
+      if (!(tetrahedron_six_volume(rest(0), rest(1), rest(2), rest(3)) > 0.0))
         return which + " needs a positive volume at rest (its nodes ordered so)";
     }
   }

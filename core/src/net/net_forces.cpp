@@ -12,6 +12,7 @@
 #include "numen/core/contact_force.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_material.hpp"
 #include "numen/core/net_tissue_contact.hpp"
 #include "numen/core/step_stages.hpp"
 
@@ -354,16 +355,12 @@ void measure_nets(const Model& model, Data& data) noexcept {
       raise_max(ratio2_max, ratio2);
       if (ratio2 < ratio2_min) ratio2_min = ratio2;
     }
-    // The watched tetrahedra (well shaped at rest) turned inside out, flat or not finite:
-    // 6 V = (x1 − x0) × (x2 − x0) · (x3 − x0).
+    // The watched tetrahedra (well shaped at rest) turned inside out, flat or not finite.
     int inverted = 0;
+    const auto x = [&](int v) -> const Vec3& { return data.nodes[static_cast<std::size_t>(v)].position; };
     for (int e = net.tetrahedron_begin; e < net.tetrahedron_begin + net.tetrahedron_count; ++e) {
       const std::array<int, 4>& t = model.net_tetrahedra[static_cast<std::size_t>(e)];
-      const Vec3& x0 = data.nodes[static_cast<std::size_t>(t[0])].position;
-      const double six_v = (data.nodes[static_cast<std::size_t>(t[1])].position - x0)
-                               .cross(data.nodes[static_cast<std::size_t>(t[2])].position - x0)
-                               .dot(data.nodes[static_cast<std::size_t>(t[3])].position - x0);
-      inverted += six_v > 0.0 ? 0 : 1;
+      inverted += tetrahedron_six_volume(x(t[0]), x(t[1]), x(t[2]), x(t[3])) > 0.0 ? 0 : 1;
     }
     out.inverted_tetrahedra = inverted;
     out.max_tie_stretch = std::sqrt(stretch2);

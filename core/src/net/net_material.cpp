@@ -20,7 +20,7 @@ namespace {
 /// Signed volume of the tetrahedron (a, b, c, d) (m³): positive when d lies on the side of
 /// (b − a) × (c − a).
 double signed_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) noexcept {
-  return (b - a).cross(c - a).dot(d - a) / 6.0;
+  return tetrahedron_six_volume(a, b, c, d) / 6.0;
 }
 
 }  // namespace

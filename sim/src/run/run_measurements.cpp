@@ -255,20 +255,18 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
   s.node_contacts_max = std::max(s.node_contacts_max, data_.num_node_contacts);
   accumulate_thread_figures(data_, s);
   accumulate_needle_figures(model, data_, s);
-  for (const core::NetOutput& net : data_.nets) {
+  for (std::size_t k = 0; k < data_.nets.size(); ++k) {
+    const core::NetOutput& net = data_.nets[k];
     s.net_penetration_max_mm = std::max(s.net_penetration_max_mm, net.max_penetration * 1e3);
     s.net_tie_stretch_max_mm = std::max(s.net_tie_stretch_max_mm, net.max_tie_stretch * 1e3);
     s.net_strain_max = std::max(s.net_strain_max, net.max_strain);
     s.net_node_speed_max_mps = std::max(s.net_node_speed_max_mps, net.max_node_speed);
     s.net_inverted_tetrahedra_max = std::max<std::int64_t>(s.net_inverted_tetrahedra_max, net.inverted_tetrahedra);
+    if (net.inverted_tetrahedra > 0 && s.net_first_inversion_s < 0.0) {  // the first: when, which net
+      s.net_first_inversion_s = data_.time;
+      s.net_first_inversion_net = model.nets[k].name;
+    }
   }
-  if (s.net_first_inversion_s < 0.0)  // the first step with a tetrahedron inside out: when, which net
-    for (std::size_t k = 0; k < data_.nets.size(); ++k)
-      if (data_.nets[k].inverted_tetrahedra > 0) {
-        s.net_first_inversion_s = data_.time;
-        s.net_first_inversion_net = model.nets[k].name;
-        break;
-      }
 }
 
 }  // namespace numen::sim

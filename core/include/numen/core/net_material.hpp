@@ -37,6 +37,12 @@ namespace numen::core {
 
 struct Model;
 
+/// Six times the signed volume of the tetrahedron (a, b, c, d) (m³): (b − a) × (c − a) · (d − a),
+/// positive when d lies on the side of (b − a) × (c − a). Not finite where a corner is not.
+inline double tetrahedron_six_volume(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) noexcept {
+  return (b - a).cross(c - a).dot(d - a);
+}
+
 /// A tetrahedral mesh of a closed surface, in the rigid component's body frame (m).
 /// Node i < surface.num_vertices() is the surface's vertex i; node surface.num_vertices() + j
 /// is interior[j]. Every tetrahedron's indices are in [0, num_nodes()), distinct, its volume
