@@ -296,6 +296,16 @@ TEST(NetMaterial, MeasureCountsTheTetrahedraTurnedInsideOut) {
     bad.net_tetrahedra.pop_back();
     EXPECT_NE(core::finalize_model(bad).find("tetrahedron range beyond"), std::string::npos);
   }
+  {
+    core::Model bad = m;
+    bad.nets[0].tetrahedron_begin = 1;
+    EXPECT_NE(core::finalize_model(bad).find("tetrahedron range must follow the previous net's"), std::string::npos);
+  }
+  {
+    core::Model bad = m;
+    bad.net_tetrahedra.push_back(bad.net_tetrahedra[0]);  // one no net owns
+    EXPECT_NE(core::finalize_model(bad).find("tetrahedron arrays hold entries no net owns"), std::string::npos);
+  }
 }
 
 // The explicit step limit add_material_net() reports holds with the material's Rayleigh damping:
