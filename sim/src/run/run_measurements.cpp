@@ -264,7 +264,7 @@ void SceneRunner::accumulate_step_figures(const platform::PeriodReport& report,
     s.net_inverted_tetrahedra_max = std::max<std::int64_t>(s.net_inverted_tetrahedra_max, net.inverted_tetrahedra);
     if (net.inverted_tetrahedra > 0 && s.net_first_inversion_s < 0.0) {  // the first: when, which net
       s.net_first_inversion_s = data_.time;
-      s.net_first_inversion_net = model.nets[k].name;
+      first_inversion_net_ = static_cast<int>(k);  // its name in summary(): no copy in the period
     }
   }
 }

@@ -237,6 +237,8 @@ RunSummary SceneRunner::summary() const {
   s.rejected_causes = rejection_causes(device_.counters());
   s.contact_clamped_steps = data_.contact_clamped_steps;
   s.net_crossed_steps = data_.net_crossed_steps;
+  if (first_inversion_net_ >= 0)
+    s.net_first_inversion_net = scene_->model.nets[static_cast<std::size_t>(first_inversion_net_)].name;
   if (s.net_inverted_tetrahedra_max > 0) {
     std::ostringstream os;
     os << std::fixed << std::setprecision(3) << "organ '" << s.net_first_inversion_net

@@ -304,6 +304,7 @@ class SceneRunner final : public RunHarness {
   double startup_min_ = 0.0;      // lowest tool penetration of the start-up so far (m)
   double startup_window_max_ = 0.0;  // deepest tool penetration since that minimum (m)
   int startup_obstacle_ = -1;     // obstacle of the deepest start-up contact (-1: none)
+  int first_inversion_net_ = -1;  // the net that first turned a tetrahedron inside out (-1: none)
   int startup_other_body_ = -1;   // ... or the other body
   // The period (k_) whose contacts open the start-up: 1, or the period after a live input's
   // first sample brought the tool there (ControlLoop::placed_period()).
