@@ -128,6 +128,30 @@ TEST(RunAllocations, OrganScenePeriodNeverAllocates) {
   expect_no_allocation(organ_scene(), "default (organ)");  // the hand goes into the organ from 3 s
 }
 
+// The default scene whose organ turns tetrahedra inside out (a load patch of 2 mm, as
+// SceneTissue.ANetThatTurnsTetrahedraInsideOutIsWarned: the first at 9.85 s): counting them and
+// noting the first, in the periods, allocates nothing (the organ's name, longer than a string's
+// small buffer here, is taken in summary()).
+TEST(RunAllocations, OrganSceneTurningTetrahedraInsideOutNeverAllocates) {
+  NUMEN_SKIP_UNDER_SANITIZER(kDeformableRunTooSlow);
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  numen::test::TempDir dir;
+  std::string text = numen::test::shipped_scene_text_anywhere("default.toml");
+  const std::size_t at = text.find("strain_stiffening = 1.0");
+  ASSERT_NE(at, std::string::npos);
+  text.insert(at, "load_patch_radius = 0.002\n");
+  // A name past the strings' small-buffer size, so that a copy of it in a period would allocate.
+  const std::string organ = "name = \"organ\"\nbody = \"organ_core\"";
+  const std::size_t named = text.find(organ);
+  ASSERT_NE(named, std::string::npos);
+  text.replace(named, organ.size(), "name = \"organ_given_by_its_material\"\nbody = \"organ_core\"");
+  const Scene scene = numen::sim::load_scene(dir.write("small_patch.toml", text));
+  const RunSummary s = expect_no_allocation(scene, "default, a 2 mm load patch", nullptr, 10'500);
+  EXPECT_GE(s.net_inverted_tetrahedra_max, 1) << "no inversion: the periods did not take that path";
+  EXPECT_EQ(s.net_first_inversion_net, "organ_given_by_its_material");
+}
+
 TEST(RunAllocations, MeshObstacleScenePeriodNeverAllocates) {
   expect_no_allocation(mesh_scene(), "mesh");  // the probe presses the mesh lobe at 1–2.7 s
 }
