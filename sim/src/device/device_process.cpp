@@ -36,6 +36,12 @@ DeviceSummary run_device(const Scene& scene, const DeviceOptions& options) {
                      "scene \"" + scene.name + "\" has " + std::to_string(num_devices(scene)) +
                          " devices ([[device]]): numen device emulates one instrument (run the "
                          "scene with numen run on the simulated bus)");
+  if (scene.servo)
+    throw InputError(scene.file, 0, 0, "device",
+                     "scene \"" + scene.name + "\": device \"" + scene.device.name +
+                         "\"'s hand has a servo ([device.trajectory.servo]): it watches the scene's "
+                         "bodies, which numen device has not (run the scene with numen run on the "
+                         "simulated bus)");
   const BusSpec spec = parse_bus_spec(options.bus);
   if (!spec.real())
     throw std::invalid_argument("numen device --bus '" + options.bus +

@@ -13,6 +13,7 @@
 
 #include "numen/hal/device/axis.hpp"
 #include "numen/hal/device/kinematics_factory.hpp"
+#include "numen/sim/device/hand_servo.hpp"
 #include "numen/sim/device/trajectory_motion.hpp"
 
 namespace numen::sim {
@@ -102,7 +103,9 @@ PlantMotion::PlantMotion(const hal::DeviceConfig& config, const DevicePlantSetti
 }
 
 hal::AxisVector PlantMotion::intent_at(double t) const noexcept {
-  return instrument_axes(config_, *kinematics_, trajectory_->at(t));
+  TrajectorySample s = trajectory_->at(t);
+  if (servo_) s.pose.position += servo_->offset();
+  return instrument_axes(config_, *kinematics_, s);
 }
 
 void PlantMotion::gather() noexcept {

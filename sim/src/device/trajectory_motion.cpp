@@ -5,6 +5,7 @@
 
 #include "numen/hal/device/kinematics_factory.hpp"
 #include "numen/hal/device/trocar_kinematics.hpp"
+#include "numen/sim/device/hand_servo.hpp"
 
 namespace numen::sim {
 
@@ -30,8 +31,9 @@ TrajectoryMotion::TrajectoryMotion(const hal::DeviceConfig& config, const Trajec
 }
 
 hal::AxisVector TrajectoryMotion::axes_at(std::int64_t t_ns) const noexcept {
-  return instrument_axes(config_, *kinematics_,
-                         trajectory_->at(static_cast<double>(t_ns - start_ns_) * 1e-9));
+  TrajectorySample s = trajectory_->at(static_cast<double>(t_ns - start_ns_) * 1e-9);
+  if (servo_) s.pose.position += servo_->offset();
+  return instrument_axes(config_, *kinematics_, s);
 }
 
 const hal::DeviceMotionState& TrajectoryMotion::at_sync(std::int64_t t_ns,

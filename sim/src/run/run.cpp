@@ -238,6 +238,20 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
   if (multirate_.enabled() && scene.multirate) {
     ghost_every_ = std::max<std::int64_t>(1, std::llround(1e-3 / scene.model.dt));
   }
+  // The hands' sight: on the simulated bus only, where the emulated instruments are the hands.
+  for (std::size_t i = 0; i < num_devices(scene); ++i) {
+    const std::optional<HandServoSpec>& spec = i == 0 ? scene.servo : scene.extra_devices[i - 1].servo;
+    servos_.push_back(nullptr);
+    if (!spec) continue;
+    const std::string& name = i == 0 ? scene.device.name : scene.extra_devices[i - 1].device.name;
+    if (real_bus_ || log_bus_ || igtl_ || (i > 0 && i > extra_instruments_.size()))
+      throw InputError("", 0, 0, "--bus",
+                       "device \"" + name + "\"'s hand has a servo ([device.trajectory.servo]): it "
+                       "moves the emulated instrument of the simulated bus, which --bus " + bus.spec +
+                       " replaces (run it on the simulated bus)");
+    servos_.back() = std::make_unique<HandServo>(*spec, scene.model.dt, name);
+    (i == 0 ? instrument_ : *extra_instruments_[i - 1]).set_servo(servos_.back().get());
+  }
   explicit_bound_ = platform::explicitly_bound_bodies(scene.binding, scene.model.num_bodies());
   std::vector<std::string> axis_names;
   for (const hal::AxisConfig& a : scene.device.axes) axis_names.push_back(a.name);
@@ -292,6 +306,9 @@ void SceneRunner::period(std::int64_t deadline_mono_ns, std::int64_t woke_mono_n
                  diverged;
   if (diverged)
     loop_->shutdown();  // zero torque from the next write on; the run stops after this period
+  // The hands that look: what they see of this step moves them from the next SYNC on.
+  for (const std::unique_ptr<HandServo>& servo : servos_)
+    if (servo) servo->observe(static_cast<double>(t) * 1e-9, data_);
   if (view_) publish_view(report, contacts);
 }
 

@@ -62,6 +62,7 @@ constexpr bool multirate_run(const S& s) noexcept { return s.multirate.enabled; 
 constexpr bool grasping(const S& s) noexcept { return s.grasping; }
 constexpr bool threaded(const S& s) noexcept { return s.threads; }
 constexpr bool needled(const S& s) noexcept { return s.needles; }
+constexpr bool served(const S& s) noexcept { return s.servos; }
 constexpr bool marked(const S& s) noexcept { return s.needle_marks; }
 constexpr bool task(const S& s) noexcept { return s.task.enabled; }
 /// A multirate run that sends feedback forces (not an admittance run, which sends poses).
@@ -258,6 +259,8 @@ constexpr RunFigure kFigures[] = {
      K::kCount, [](const S& s) noexcept { return count(s.invalid_target_steps); }},
     {"thread.tension_max_n", "N", "Largest segment tension of any suture thread", K::kReal,
      [](const S& s) noexcept { return real(s.thread_tension_max_n); }, threaded},
+    {"thread.tension_max_s", "s", "... its time", K::kReal,
+     [](const S& s) noexcept { return real(s.thread_tension_max_s); }, threaded},
     {"thread.stretch_max", "1", "Largest segment strain (l − l0)/l0 of any suture thread", K::kReal,
      [](const S& s) noexcept { return real(s.thread_stretch_max); }, threaded},
     {"thread.breaks", "", "Threads that broke (a pull past their break_strain; each a warning)", K::kCount,
@@ -310,6 +313,14 @@ constexpr RunFigure kFigures[] = {
     {"needle.lines", "", "Each needle: its counts, whether it went through and when, the tip force at its "
      "last puncture, its largest deviation, its errors from its marks", K::kTextList,
      [](const S& s) noexcept { return list(s.needle_lines); }, needled},
+    {"servo.offset_max_mm", "mm", "Largest correction a hand's servo made to its scripted path ([device.trajectory.servo])",
+     K::kReal, [](const S& s) noexcept { return real(s.servo_offset_max_mm); }, served},
+    {"servo.error_max_mm", "mm", "Largest distance of a servo's watched point from its target while one was planned",
+     K::kReal, [](const S& s) noexcept { return real(s.servo_error_max_mm); }, served},
+    {"servo.saturated_periods", "", "Periods a hand's correction was clamped to its max_offset (a warning)",
+     K::kCount, [](const S& s) noexcept { return count(s.servo_saturated_periods); }, served},
+    {"servo.lines", "", "Each servo: its device, the body it watches, its largest offset and error, its saturated periods",
+     K::kTextList, [](const S& s) noexcept { return list(s.servo_lines); }, served},
     {"grasp.started", "", "Grasps started (jaws closed below close_angle_deg on a body, a thread or tissue)",
      K::kCount, [](const S& s) noexcept { return count(s.grasps_started); }, grasping},
     {"grasp.released", "", "Grasps ended by the jaws opening past open_angle_deg", K::kCount,

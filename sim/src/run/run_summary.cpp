@@ -105,6 +105,33 @@ std::string format_device_line(const DeviceRunSummary& d) {
   return os.str();
 }
 
+void SceneRunner::summarize_servos(RunSummary& s) const {
+  for (std::size_t i = 0; i < servos_.size(); ++i) {
+    const HandServo* servo = servos_[i].get();
+    if (!servo) continue;
+    s.servos = true;
+    s.servo_offset_max_mm = std::max(s.servo_offset_max_mm, 1e3 * servo->offset_max_m());
+    s.servo_error_max_mm = std::max(s.servo_error_max_mm, 1e3 * servo->error_max_m());
+    s.servo_saturated_periods += servo->saturated_periods();
+    const std::string& device = i == 0 ? scene_->device.name : scene_->extra_devices[i - 1].device.name;
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(3) << device << " watches " << servo->spec().body_name
+       << ": offset max " << 1e3 * servo->offset_max_m() << " mm (at most "
+       << 1e3 * servo->spec().settings.max_offset_m << "), error max " << 1e3 * servo->error_max_m()
+       << " mm, saturated " << servo->saturated_periods() << " periods";
+    s.servo_lines.push_back(os.str());
+    if (servo->saturated_periods() > 0) {
+      std::ostringstream w;
+      w << std::fixed << std::setprecision(3) << "device '" << device << "': its hand's servo reached its max_offset ("
+        << 1e3 * servo->spec().settings.max_offset_m << " mm) in " << servo->saturated_periods()
+        << " periods, the first at " << servo->first_saturation_s()
+        << " s: the hand could not bring " << servo->spec().body_name
+        << " to its target (a larger max_offset, or a script nearer what happens; docs/suturing.md, \"The drivers' sight\")";
+      s.warnings.push_back(w.str());
+    }
+  }
+}
+
 void SceneRunner::summarize_devices(RunSummary& s) const {
   if (extra_devices_.empty()) return;
   for (std::size_t i = 0; i < loop_->num_devices(); ++i) {
@@ -262,6 +289,7 @@ RunSummary SceneRunner::summary() const {
   summarize_threads(scene_->model, data_, s);
   summarize_needles(s);
   summarize_devices(s);
+  summarize_servos(s);
   summarize_task(*scene_, data_, s);
   multirate_.summarize(s);
   if (real_bus_) {

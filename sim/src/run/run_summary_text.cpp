@@ -49,7 +49,7 @@ constexpr RunSummarySegment kLayout[] = {
     {"  device: limit cycle at {limit_cycle_time_s} s: {limit_cycle_amplitude_mm} mm at "
      "{limit_cycle_hz} Hz\n",
      set("limit_cycle_detected")},
-    {"  threads: tension max {thread.tension_max_n} N, stretch max {thread.stretch_max}, breaks "
+    {"  threads: tension max {thread.tension_max_n} N at {thread.tension_max_s} s, stretch max {thread.stretch_max}, breaks "
      "{thread.breaks}",
      set("thread.tension_max_n", "thread.breaks")},
     {" (the first at {thread.first_break_s} s)", set("thread.breaks")},
@@ -72,6 +72,10 @@ constexpr RunSummarySegment kLayout[] = {
      set("needle.lines"), set("needle.marks")},
     {"\n", set("needle.lines")},
     {"  needle {*}\n", set("needle.lines"), {}, {}, "needle.lines"},
+    {"  servos: offset max {servo.offset_max_mm} mm, error max {servo.error_max_mm} mm, saturated "
+     "{servo.saturated_periods} periods\n",
+     set("servo.lines")},
+    {"  servo {*}\n", set("servo.lines"), {}, {}, "servo.lines"},
     {"  grasps: {grasp.started} started, {grasp.released} released, {grasp.slipped} slipped\n",
      set("grasp.started")},
     {"  grasp event: {*}\n", set("grasp.started"), {}, {}, "grasp.events"},

@@ -16,7 +16,10 @@ void accumulate_thread_figures(const core::Data& data, RunSummary& s) noexcept {
   bool unconverged = false;
   for (const core::ThreadState& t : data.threads) {
     unconverged = unconverged || !t.output.converged;
-    s.thread_tension_max_n = std::max(s.thread_tension_max_n, t.output.max_tension);
+    if (t.output.max_tension > s.thread_tension_max_n || s.thread_tension_max_s < 0.0) {
+      s.thread_tension_max_n = std::max(s.thread_tension_max_n, t.output.max_tension);
+      s.thread_tension_max_s = data.time;
+    }
     s.thread_stretch_max = std::max(s.thread_stretch_max, t.output.max_stretch);
     if (t.output.broke) {
       if (s.thread_breaks == 0) s.thread_first_break_s = data.time;

@@ -66,14 +66,14 @@ PathSegment parse_segment(const TomlTable& s) {
   if (s.has("jaw")) seg.jaw = s.number("jaw");
   seg.jaw_time = s.number_or("jaw_time", 0.0);
   if (type == "line") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "from", "to", "duration"});
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from", "servo_body", "servo_point", "from", "to", "duration"});
     LineSegment l;
     l.from = optional_vec3(s, "from");
     l.to = s.vec3("to");
     l.duration = s.number("duration");
     seg.shape = l;
   } else if (type == "circle") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "centre", "radius", "axis",
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from", "servo_body", "servo_point", "centre", "radius", "axis",
                   "period", "start_phase", "duration"});
     CircleSegment c;
     c.centre = optional_vec3(s, "centre");
@@ -84,13 +84,13 @@ PathSegment parse_segment(const TomlTable& s) {
     c.duration = s.number("duration");
     seg.shape = c;
   } else if (type == "hold") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "position", "duration"});
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from", "servo_body", "servo_point", "position", "duration"});
     HoldSegment h;
     h.position = optional_vec3(s, "position");
     h.duration = s.number("duration");
     seg.shape = h;
   } else {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "from", "to", "to_orientation",
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from", "servo_body", "servo_point", "from", "to", "to_orientation",
                   "step_time", "duration"});
     StepSegment st;
     st.from = optional_vec3(s, "from");
@@ -149,10 +149,72 @@ InputError missing_part(const TomlTable& root, const std::string& part) {
                               "\"Drive it from your own program\")");
 }
 
+/// A scripted trajectory's servo (`[trajectory.servo]`) before its bodies are known: the spec,
+/// its spans' bodies not yet resolved, and where each span's body was named (its errors' place).
+struct ServoDraft {
+  TomlTable table;
+  HandServoSpec spec;
+  std::vector<std::string> span_bodies;   // per span: the watched body's name
+  std::vector<TomlTable> span_body_from;  // per span: the table whose `servo_body` or `body` named it
+};
+
+/// The servo of scripted trajectory `t` whose segments `segs` start at path.segment_start(i):
+/// its gains and default body and point from `[trajectory.servo]`, a span per segment with a
+/// `servo_target` (its own `servo_body`, `servo_point` if given; from its `servo_from` if given,
+/// else from the previous segment's target if that one had one on the same point and ended where
+/// this one starts, else from its own). None without the table; a `servo_target` without it, a
+/// `servo_from`, `servo_body` or `servo_point` without a `servo_target`, or the table without any
+/// target, is an error at the key.
+std::optional<ServoDraft> parse_servo(const TomlTable& t, const std::vector<TomlTable>& segs,
+                                      const ScriptedPath& path) {
+  const std::optional<TomlTable> table = t.table("servo");
+  for (const TomlTable& s : segs)
+    for (const char* key : {"servo_from", "servo_body", "servo_point"})
+      if (s.has(key) && !s.has("servo_target"))
+        s.fail(key, std::string(key) + " names what a servo_target aims: give the segment one");
+  if (!table) {
+    for (const TomlTable& s : segs)
+      if (s.has("servo_target"))
+        s.fail("servo_target", "a servo target needs the trajectory's [" + t.key_path("servo") +
+                                   "] (its body and gains; docs/scenes.md)");
+    return std::nullopt;
+  }
+  table->allow_only({"body", "point", "latency", "time_constant", "max_offset"});
+  ServoDraft d{*table, {}, {}, {}};
+  const std::string body = table->string("body");
+  const Vec3 point = table->vec3_or("point", Vec3::Zero());
+  d.spec.settings.latency_s = table->number_in("latency", 0.0, kMaxServoLatency, d.spec.settings.latency_s);
+  d.spec.settings.time_constant_s = table->number_in("time_constant", 1e-6, kInf, d.spec.settings.time_constant_s);
+  d.spec.settings.max_offset_m = table->number_in("max_offset", 1e-9, 1.0, d.spec.settings.max_offset_m);
+  for (std::size_t i = 0; i < segs.size(); ++i) {
+    if (!segs[i].has("servo_target")) continue;
+    HandServoSpan span;
+    span.t0_s = path.segment_start(i);
+    span.t1_s = i + 1 < segs.size() ? path.segment_start(i + 1) : path.duration();
+    span.target_end = segs[i].vec3("servo_target");
+    span.point = segs[i].vec3_or("servo_point", point);
+    const bool own_body = segs[i].has("servo_body");
+    const std::string name = own_body ? segs[i].string("servo_body") : body;
+    const bool follows = !d.spec.spans.empty() && std::abs(d.spec.spans.back().t1_s - span.t0_s) < 1e-9 &&
+                         d.span_bodies.back() == name && d.spec.spans.back().point == span.point;
+    span.target_start = segs[i].has("servo_from") ? segs[i].vec3("servo_from")
+                        : follows                     ? d.spec.spans.back().target_end
+                                                      : span.target_end;
+    d.spec.spans.push_back(span);
+    d.span_bodies.push_back(name);
+    d.span_body_from.push_back(own_body ? segs[i] : *table);
+  }
+  if (d.spec.spans.empty())
+    table->fail("body", "no segment of " + t.key_path("segment") + " gives a servo_target: the servo would "
+                        "never look (give the segments it should correct a servo_target, or drop the table)");
+  return d;
+}
+
 /// A trajectory table (`[trajectory]`, or a device's `[device.trajectory]`) sampled for the
-/// period `dt`.
+/// period `dt`; a scripted one's servo into `servo` (none otherwise).
 Trajectory parse_trajectory(const TomlTable& t, double dt, const std::filesystem::path& scene_dir,
-                            std::vector<std::string>& warnings) {
+                            std::vector<std::string>& warnings, std::optional<ServoDraft>& servo) {
+  servo.reset();
   const std::string source = t.choice("source", {"jigsaws", "scripted", "pointer"}, std::nullopt);
   Trajectory recorded;
   if (source == "pointer") {
@@ -184,7 +246,7 @@ Trajectory parse_trajectory(const TomlTable& t, double dt, const std::filesystem
       t.fail("file", "the recording" + why);
     }
   } else {
-    t.allow_only({"source", "start", "segment", "placement"});
+    t.allow_only({"source", "start", "segment", "placement", "servo"});
     const TrajectorySample start = parse_start(t);
     const std::vector<TomlTable> segs = t.tables("segment");
     if (segs.empty()) t.fail("segment", "a scripted trajectory needs at least one [[trajectory.segment]]");
@@ -193,6 +255,7 @@ Trajectory parse_trajectory(const TomlTable& t, double dt, const std::filesystem
       for (const TomlTable& s : segs) segments.push_back(parse_segment(s));
       ScriptedPath path(std::move(segments), start, t.key_path("segment"));
       recorded = path.sample(dt);
+      servo = parse_servo(t, segs, path);
     } catch (const InputError& e) {
       if (e.line() > 0) throw;
       relocate(e, t, segs);
@@ -201,7 +264,12 @@ Trajectory parse_trajectory(const TomlTable& t, double dt, const std::filesystem
   try {
     // No resampling at dt: the loop interpolates the knots at each period's time
     // (memory independent of dt and of the run's duration).
-    return transformed(recorded, parse_placement(t));
+    const Placement placement = parse_placement(t);
+    if (servo)  // its targets are points of the path's frame, placed as the path is
+      for (HandServoSpan& span : servo->spec.spans)
+        for (Vec3* p : {&span.target_start, &span.target_end})
+          *p = placement.pose.position + placement.pose.orientation * (placement.scale * (*p - placement.origin));
+    return transformed(recorded, placement);
   } catch (const InputError& e) {
     if (e.line() > 0) throw;
     t.fail("placement", e.message());
@@ -386,16 +454,20 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   }
   scene.has_device = root.has("device");
   Trajectory shared;
-  if (auto t = root.table("trajectory")) shared = parse_trajectory(*t, scene.model.dt, dir, scene.warnings);
+  std::optional<ServoDraft> shared_servo;
+  if (auto t = root.table("trajectory"))
+    shared = parse_trajectory(*t, scene.model.dt, dir, scene.warnings, shared_servo);
   // (A recording may be large: the last device on the scene's [trajectory] takes it, the others
   // copy it.)
   const auto users = static_cast<std::size_t>(std::count_if(
       device_tables.begin(), device_tables.end(), [&](const TomlTable& d) { return !own(d); }));
   std::size_t used = 0;
   std::vector<Trajectory> trajectories;
+  std::vector<std::optional<ServoDraft>> servos;  // per device: its hand's sight, unresolved
   for (const TomlTable& d : device_tables) {
+    servos.push_back(shared_servo);  // the scene's [trajectory]'s, unless its own
     if (auto t = d.table("trajectory"))
-      trajectories.push_back(parse_trajectory(*t, scene.model.dt, dir, scene.warnings));
+      trajectories.push_back(parse_trajectory(*t, scene.model.dt, dir, scene.warnings, servos.back()));
     else if (root.has("trajectory") || !some_device_has_one)  // (none at all: a scene the caller
       trajectories.push_back(++used < users ? shared : std::move(shared));  // steps: run_missing)
     else
@@ -422,6 +494,26 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     parse_deformables(root, dir, scene.model, scene.net_triangles, scene.net_loads, scene.warnings);
   parse_needles(root, scene);  // bodies of their own, after every other body and the nets
   parse_threads(root, scene);  // scene_thread.hpp; after the needles, whose tails they may tie to
+  // The hands' sight: the bodies they watch are known now (a needle's among them).
+  for (std::size_t i = 0; i < servos.size(); ++i) {
+    if (!servos[i]) continue;
+    ServoDraft& d = *servos[i];
+    std::vector<std::string> names;  // the watched bodies, in first-watched order
+    for (std::size_t k = 0; k < d.spec.spans.size(); ++k) {
+      const std::string& name = d.span_bodies[k];
+      for (int b = 0; b < scene.model.num_bodies() && d.spec.spans[k].body < 0; ++b)
+        if (scene.model.bodies[static_cast<std::size_t>(b)].name == name) d.spec.spans[k].body = b;
+      const TomlTable& from = d.span_body_from[k];
+      if (d.spec.spans[k].body < 0)
+        from.fail(from.has("servo_body") ? "servo_body" : "body",
+                  "no body named \"" + name + "\" (a [[body]] or [[needle]] name)");
+      if (std::find(names.begin(), names.end(), name) == names.end()) {
+        d.spec.body_name += (names.empty() ? "" : ", ") + name;
+        names.push_back(name);
+      }
+    }
+    (i == 0 ? scene.servo : scene.extra_devices[i - 1].servo) = std::move(d.spec);
+  }
 
   // Bus between controller and instrument.
   double latency = 100e-6;
@@ -526,6 +618,10 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                      "(docs/thread.md, \"Limits\")");
   }
   parse_multirate(root, scene);
+  for (const std::optional<ServoDraft>& d : servos)
+    if (d && scene.multirate)
+      d->table.fail("body", "a hand's servo watches the single-rate step's bodies: a scene with "
+                            "[multirate] has no servo yet (docs/suturing.md, \"The drivers' sight\")");
   if (scene.multirate && !scene.model.grasps.empty())
     root.tables("grasp").front().fail(
         "name", "grasping runs in the single-rate step: a scene with [multirate] has no grasper yet "

@@ -149,3 +149,21 @@ TEST(DeviceProcess, ASceneOfSeveralDevicesIsRefused) {
     EXPECT_NE(e.message().find("has 2 devices"), std::string::npos) << e.what();
   }
 }
+
+TEST(DeviceProcess, AHandWithAServoIsRefused) {
+  // A servo moves the hand by what it sees of the scene's bodies, which this process has not.
+  numen::test::TempDir dir;
+  std::string text = numen::test::replace(numen::test::kMiniScene, "duration = 0.25\n",
+                                          "duration = 0.25\nservo_target = [0.01, 0.0, 0.0]\n");
+  text += "\n[trajectory.servo]\nbody = \"tool\"\n";
+  const numen::sim::Scene scene = numen::sim::load_scene(dir.write("servo.toml", text));
+  numen::sim::DeviceOptions options;
+  options.bus = "serial:/dev/null";
+  try {
+    (void)numen::sim::run_device(scene, options);
+    FAIL() << "a sighted hand was emulated blind";
+  } catch (const numen::sim::InputError& e) {
+    EXPECT_EQ(e.key(), "device");
+    EXPECT_NE(e.message().find("has a servo"), std::string::npos) << e.what();
+  }
+}

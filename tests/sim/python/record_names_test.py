@@ -55,9 +55,10 @@ def test_run_summary_carries_run_figures_names(scene):
     summary = leaf_names(numen.run_scene(scene, duration=0.05))
     assert summary <= figures, summary - figures
     # Figures a run leaves out are those of other kinds of run (admittance, multirate) and of
-    # scenes with graspers, threads, needles, a [task] or several devices; first_pass_through_s is there only when a
+    # scenes with graspers, threads, needles, hands with a servo, a [task] or several devices; first_pass_through_s is there only when a
     # pair of bodies went through each other (docs/dynamics.md, "Crossing").
     missing = {n for n in figures - summary
-               if not n.startswith(("admittance.", "multirate.", "grasp.", "thread.", "needle.", "task.", "device_lines"))
+               if not n.startswith(("admittance.", "multirate.", "grasp.", "thread.", "needle.", "servo.", "task.",
+                                    "device_lines"))
                and n != "first_pass_through_s"}
     assert not missing, missing

@@ -91,6 +91,7 @@ inline sim::RunSummary full_managed_summary() {
   s.invalid_target_steps = 3;
   s.threads = true;
   s.thread_tension_max_n = 1.5;
+  s.thread_tension_max_s = 2.75;
   s.thread_stretch_max = 0.004;
   s.thread_breaks = 1;
   s.thread_newton_not_converged_steps = 3;
@@ -116,6 +117,11 @@ inline sim::RunSummary full_managed_summary() {
   s.needle_lines = {"needle: 1 puncture, 1 exit, 2 releases, 1 tunnel; through (in at 1.250 s, out at 2.500 s); "
                     "tip force at the last puncture 1.125 N (threshold 1.000 N); deviation from the arc max "
                     "0.375 mm; entry 0.250 mm from its mark; exit 0.500 mm from its mark"};
+  s.servos = true;
+  s.servo_offset_max_mm = 1.25;
+  s.servo_error_max_mm = 0.875;
+  s.servo_saturated_periods = 3;
+  s.servo_lines = {"right watches needle: offset max 1.250 mm (at most 4.000), error max 0.875 mm, saturated 3 periods"};
   s.grasping = true;
   s.grasps_started = 2;
   s.grasps_released = 1;

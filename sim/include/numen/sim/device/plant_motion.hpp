@@ -43,6 +43,8 @@
 
 namespace numen::sim {
 
+class HandServo;  // hand_servo.hpp
+
 /// Most sub-steps per control period a plant takes.
 inline constexpr int kMaxPlantSubsteps = 1000;
 /// A silence of the bus longer than this (s) between two SYNCs restarts the emulated device at
@@ -126,6 +128,9 @@ class PlantMotion final : public hal::DeviceMotion {
   const hal::AxisVector& intent_axes() const noexcept { return intent_; }
   const hal::Kinematics& kinematics() const noexcept { return *kinematics_; }
   const PlantFigures& figures() const noexcept { return figures_; }
+  /// The hand's sight (hand_servo.hpp): its offset() moves the intent's tool position from the
+  /// next SYNC on; null: none. `servo` must outlive this object's use of it.
+  void set_servo(const HandServo* servo) noexcept { servo_ = servo; }
   /// The state of the last SYNC.
   const hal::DeviceMotionState& state() const noexcept { return state_; }
   const AxisPlant& axis(int i) const noexcept { return plants_[static_cast<std::size_t>(i)]; }
@@ -142,6 +147,7 @@ class PlantMotion final : public hal::DeviceMotion {
   DevicePlantSettings settings_;
   HandSettings hand_;
   const Trajectory* trajectory_;
+  const HandServo* servo_ = nullptr;
   std::int64_t start_ns_;
   bool start_at_sync_ = false;
   std::unique_ptr<hal::Kinematics> kinematics_;

@@ -68,6 +68,12 @@ class SimulatedInstrument {
   const hal::DeviceEmulator& emulator() const noexcept { return emulator_; }
   hal::DeviceEmulator& emulator() noexcept { return emulator_; }
   const hal::Kinematics& kinematics() const noexcept { return motion_.kinematics(); }
+  /// The hand's sight (hand_servo.hpp) for the replay and the closed loop's intent; null:
+  /// none. `servo` must outlive this object's use of it.
+  void set_servo(const HandServo* servo) noexcept {
+    motion_.set_servo(servo);
+    if (plant_) plant_->set_servo(servo);
+  }
   /// The hand's replayed motion (TrajectoryMotion; the intent in closed loop).
   const TrajectoryMotion& motion() const noexcept { return motion_; }
   /// The closed loop's device and hand, or null in replay.

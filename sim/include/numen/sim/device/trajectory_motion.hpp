@@ -17,6 +17,8 @@
 
 namespace numen::sim {
 
+class HandServo;  // hand_servo.hpp
+
 /// Axis values (m or rad) that put an instrument of `config` (with its `kinematics`, built
 /// from the same config) at the tool-frame pose of `sample`: trocar instrument — inverse
 /// kinematics of the tip through the trocar, jaw from the sample; pose tracker — inverse
@@ -38,13 +40,18 @@ class TrajectoryMotion final : public hal::DeviceMotion {
   void start_at_next_sync() noexcept { start_at_sync_ = true; }
   /// Bus time (ns) at which the trajectory starts.
   std::int64_t start_ns() const noexcept { return start_ns_; }
-  /// Axis values of the trajectory at bus time `t_ns` (m or rad).
+  /// Axis values of the trajectory at bus time `t_ns` (m or rad), the tool frame moved by the
+  /// servo's offset where one is set.
   hal::AxisVector axes_at(std::int64_t t_ns) const noexcept;
   const hal::Kinematics& kinematics() const noexcept { return *kinematics_; }
+  /// The hand's sight (hand_servo.hpp): its offset() moves the trajectory's tool position from
+  /// the next SYNC on; null: none. `servo` must outlive this object's use of it.
+  void set_servo(const HandServo* servo) noexcept { servo_ = servo; }
 
  private:
   hal::DeviceConfig config_;
   const Trajectory* trajectory_;
+  const HandServo* servo_ = nullptr;
   std::int64_t start_ns_;
   bool start_at_sync_ = false;
   std::unique_ptr<hal::Kinematics> kinematics_;

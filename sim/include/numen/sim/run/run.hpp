@@ -16,6 +16,7 @@
 
 #include "numen/core/data.hpp"
 #include "numen/hal/device/instrument_device.hpp"
+#include "numen/sim/device/hand_servo.hpp"
 #include "numen/hal/transport/bus_recorder.hpp"
 #include "numen/hal/transport/bus_share.hpp"
 #include "numen/hal/transport/log_bus.hpp"
@@ -280,6 +281,11 @@ class SceneRunner final : public RunHarness {
   // device i.
   std::vector<std::unique_ptr<SimulatedInstrument>> extra_instruments_;
   std::vector<std::unique_ptr<hal::InstrumentDevice>> extra_devices_;
+  // Per device: its hand's sight (hand_servo.hpp; null: none), observing each period's step and
+  // moving its emulated instrument's hand from the next SYNC on.
+  std::vector<std::unique_ptr<HandServo>> servos_;
+  // The servos' figures into s (RunSummary::servo_lines and the rest; a saturated one warned).
+  void summarize_servos(RunSummary& s) const;
   std::unique_ptr<hal::BusShare> device_share_;
   // Per device of a scene of several: its period figures (DeviceRunSummary), kept by
   // tally_devices().

@@ -339,6 +339,7 @@ struct RunSummary {
   // Suture threads (docs/thread.md; accumulate_thread_figures(), summarize_threads()).
   bool threads = false;                  ///< The scene has a thread ([[thread]]).
   double thread_tension_max_n = 0.0;     ///< Largest segment tension of any thread over the run (N).
+  double thread_tension_max_s = -1.0;  ///< When (s; −1: no thread).
   double thread_stretch_max = 0.0;       ///< Largest segment strain of any thread over the run.
   std::int64_t thread_breaks = 0;        ///< Threads that broke (a pull past break_strain).
   double thread_first_break_s = -1.0;    ///< Time of the first break (s; −1: none).
@@ -376,6 +377,14 @@ struct RunSummary {
   double needle_exit_error_mm = -1.0;
   /// Per needle: "NAME: 1 puncture, 1 exit, ...; through; ..." (summarize_needles()).
   std::vector<std::string> needle_lines;
+  // The hands' sight (`[device.trajectory.servo]`; hand_servo.hpp, docs/suturing.md "The
+  // drivers' sight"): over the devices whose hand has a servo.
+  bool servos = false;                       ///< A device's hand has a servo.
+  double servo_offset_max_mm = 0.0;          ///< Largest correction of a hand (mm).
+  double servo_error_max_mm = 0.0;           ///< Largest error a servo saw while aimed (mm).
+  std::int64_t servo_saturated_periods = 0;  ///< Periods a hand's correction was clamped.
+  /// Per servo: "DEVICE watches BODY: offset max … mm, error max … mm, saturated … periods".
+  std::vector<std::string> servo_lines;
   // Grasping (docs/grasping.md; summarize_grasps()): sums over the scene's graspers.
   bool grasping = false;                 ///< The scene has a grasper ([[grasp]]).
   std::int64_t grasps_started = 0;       ///< Grasps that started.

@@ -19,6 +19,7 @@
 #include "numen/platform/device_binding.hpp"
 #include "numen/sim/device/admittance_hand.hpp"
 #include "numen/sim/device/hand.hpp"
+#include "numen/sim/device/hand_servo.hpp"
 #include "numen/sim/device/plant_motion.hpp"
 #include "numen/sim/input/input_error.hpp"
 #include "numen/sim/input/trajectory.hpp"
@@ -141,6 +142,9 @@ struct SceneDevice {
   HandSettings hand;  ///< Its simulated hand (`[device.hand]`).
   /// Its mechanics (`[device.plant]`; unset: the emulated instrument replays its trajectory).
   std::optional<DevicePlantSettings> plant;
+  /// Its hand's sight (`[device.trajectory.servo]` and its segments' `servo_target`;
+  /// hand_servo.hpp): unset, the hand follows its script blind.
+  std::optional<HandServoSpec> servo;
   std::string trocar_note;  ///< How its trocar point was placed; empty if not a trocar.
 };
 
@@ -211,6 +215,9 @@ struct Scene {
   /// under the drives' torques and the hand (closed loop, PlantMotion); unset, it replays the
   /// trajectory whatever the torques. torque_phase_s is compute_phase_s.
   std::optional<DevicePlantSettings> plant;
+  /// Device 0's hand's sight (`[device.trajectory.servo]` and its segments' `servo_target`;
+  /// hand_servo.hpp): unset, the hand follows its script blind.
+  std::optional<HandServoSpec> servo;
   /// The OpenIGTLink tracker (`[device.igtl]`, pose trackers only): the device `--bus igtl`
   /// reads; unset, `--bus igtl` is refused.
   std::optional<IgtlTrackerScene> igtl;
