@@ -176,13 +176,26 @@ def trocar_tool(trocar, hinge, wanted):
 N_AXIS = (-math.cos(ALPHA), 0.0, -math.sin(ALPHA))   # the shafts' direction, trocar to jaws
 E_Y = (0.0, 1.0, 0.0)                                 # in the needle's plane, horizontal
 E_U = (-math.sin(ALPHA), 0.0, math.cos(ALPHA))        # in the needle's plane, up
-# The marks: where the arc about MARK_CENTRE meets the pad's top. The drivers aim the arc's centre
-# AIM off it: the tip dents the surface by about 1.7 mm before it goes in and slides 1.5 mm along it
-# towards the exit (its material point lands 1.6 mm from where the undented surface meets the
-# arc; the exit, through a surface the needle does not push, lands 0.4 mm off); the aim splits it.
+# The marks: where the arc about MARK_CENTRE meets the pad's top; the drivers' scripts turn the
+# needle about that centre. A driver that holds the needle also looks at it (its servo,
+# docs/suturing.md "The drivers' sight"): its hand is moved by what puts the needle's arc centre on
+# the plan's, SERVO_AIM off it where it drives the needle through the pad. The tip dents the surface
+# by about 1.7 mm before it goes in and slides along it towards the exit, so that a needle turned
+# about the marks' centre comes in 0.8 mm past its entry mark and 0.4 mm off its exit (measured with
+# the servo on the centre): the aim, lower and back, is what an expert's eye learns.
 MARK_CENTRE = (0.0, 0.0, CENTRE_HEIGHT * R * math.cos(ALPHA))
-AIM = (-0.0009, 0.0007, 0.0)
-CENTRE = add(MARK_CENTRE, AIM)
+CENTRE = MARK_CENTRE
+SERVO_AIM = (-0.0006, 0.0003, -0.0005)   # m: the servo's target, off the plan's arc centre, in the passes
+SERVO_LATENCY = 0.002          # s: the eye and hand's delay (docs/suturing.md: 20 ms gave 15 of 20, 150 ms none)
+SERVO_TIME_CONSTANT = 0.05     # s: the correction's integral time constant
+SERVO_MAX_OFFSET = 0.004       # m: the largest correction of a hand
+GRIP_MAX_FORCE = 15.0           # N: the pull past which a driver's grip on the needle slips: a needle
+                               # driver's locked jaws hold the needle against the thread drawn through the
+                               # pad (3-7 N in the perturbed runs); the default 5 N let it slip there
+TUBE_HINGE = (0.0, 0.0, 0.04)  # m: the jaws' hinge (the tool frame) in the shaft body's frame
+                               # (make_peg_transfer.instrument(): the tube 40 mm behind it)
+
+
 Z_BODY = cross(E_U, E_Y)                              # the needle's +z: advancing turns about it
 TROCAR_ORIENTATION = qfrom_axes(E_Y, cross(N_AXIS, E_Y), N_AXIS)
 
@@ -208,8 +221,8 @@ BETA_ENTRY, BETA_EXIT = crossing(-1), crossing(+1)
 # The passes' arc centres: the second PASS_SPACING along +x (towards the trocars), a running
 # suture's next stitch along the wound (the marks' line, y, crosses it).
 CENTRES = [add(CENTRE, (k * PASS_SPACING, 0.0, 0.0)) for k in range(PASSES)]
-ENTRY_MARKS = [sub(on_circle(BETA_ENTRY, c), AIM) for c in CENTRES]
-EXIT_MARKS = [sub(on_circle(BETA_EXIT, c), AIM) for c in CENTRES]
+ENTRY_MARKS = [on_circle(BETA_ENTRY, c) for c in CENTRES]
+EXIT_MARKS = [on_circle(BETA_EXIT, c) for c in CENTRES]
 
 # The needle's pose at the start: body x towards the arc's middle (β_tip + 90 deg), z = Z_BODY.
 NEEDLE_X = unit(add(mul(E_Y, math.cos(TIP_START + math.pi / 2)), mul(E_U, math.sin(TIP_START + math.pi / 2))))
@@ -234,7 +247,7 @@ def trocar_for(grip_beta):
 
 
 def carried_path(trocar, grip_beta, poses, centre=CENTRE):
-    """The knots (hinge position, orientation) of a driver that holds the wire at β of the needle
+    """The knots (hinge position, orientation, the needle's arc centre there) of a driver that holds the wire at β of the needle
     whose arc is about `centre` (at turn 0), carrying the needle through `poses`: each (arc
     centre, turn), the needle turned about its arc's axis by `turn` (the tip advancing) and moved
     so that its arc is about that centre. Each knot is the rigid motion mapped onto the trocar (its
@@ -249,7 +262,7 @@ def carried_path(trocar, grip_beta, poses, centre=CENTRE):
         for _ in range(20):  # move the hinge until the centre the jaws carry is c
             q = trocar_tool(trocar, hinge, wanted_q)
             hinge = add(hinge, sub(c, add(hinge, qrot(q, centre_in_jaws))))
-        knots.append((hinge, trocar_tool(trocar, hinge, wanted_q)))
+        knots.append((hinge, trocar_tool(trocar, hinge, wanted_q), c))
     return knots
 
 
@@ -272,28 +285,36 @@ def qexp(v):
 
 class Path:
     """A device's scripted path: line and hold segments (each with its orientation and the spin
-    to the next), as absolute times."""
+    to the next), as absolute times. `tube`: the instrument's shaft body, which the hand watches
+    when it comes to take the needle."""
 
-    def __init__(self, start, q):
+    def __init__(self, start, q, tube):
         self.t, self.at, self.q, self.segments = 0.0, start, q, []
         self.start = (start, q)
+        self.tube = tube
 
-    def move(self, to, q, duration, jaw=None):
+    def move(self, to, q, duration, jaw=None, servo=None):
+        """A line to `to` with orientation `q`; `servo`: where the needle's arc centre should be
+        at its end (the servo's target; none: the hand does not look), or (target, body, point,
+        from) for another body's point, from `from` at the segment's start (None: as the parser
+        takes it)."""
         spin = mul(qlog(qmul(q, qconj(self.q))), 1.0 / duration)
-        self.segments.append(("line", to, self.q, spin, duration, jaw))
+        self.segments.append(("line", to, self.q, spin, duration, jaw, servo))
         self.t, self.at, self.q = self.t + duration, to, q
 
-    def hold(self, duration, jaw=None):
-        self.segments.append(("hold", None, self.q, None, duration, jaw))
+    def hold(self, duration, jaw=None, servo=None):
+        self.segments.append(("hold", None, self.q, None, duration, jaw, servo))
         self.t += duration
 
-    def until(self, t):
+    def until(self, t, servo=None):
         if t > self.t + 1e-9:
-            self.hold(t - self.t)
+            self.hold(t - self.t, servo=servo)
 
-    def follow(self, knots, duration=KNOT / TURN_RATE):
-        for hinge, q in knots[1:]:
-            self.move(hinge, q, duration)
+    def follow(self, knots, duration=KNOT / TURN_RATE, aim=None):
+        """Along `knots` (carried_path()); with `aim`, looking at the needle: its arc centre on
+        each knot's, moved by `aim`."""
+        for hinge, q, c in knots[1:]:
+            self.move(hinge, q, duration, servo=add(c, aim) if aim is not None else None)
 
     def travel(self, trocar, to, q, duration):
         """To `to` with orientation `q` (its roll about the shaft) in knots of at most 0.1 s, each
@@ -313,13 +334,18 @@ def vec(v):
     return "[" + ", ".join(f"{c:.6f}" for c in v) + "]"
 
 
-def hand_over(taker, giver, knot):
-    """`taker` comes in along its shaft to `knot` (hinge, orientation) over the wire and closes;
-    `giver` then opens and draws back 20 mm along its shaft; `taker` waits for it."""
-    hinge, q = knot
-    taker.move(add(hinge, mul(N_AXIS, -0.004)), q, 0.6)
-    taker.move(hinge, q, 0.4)
-    taker.hold(0.3, CLOSED)
+def hand_over(taker, giver, knot, giver_servo=None):
+    """`taker` comes in along its shaft to `knot` (hinge, orientation, ...) over the wire and
+    closes; `giver` then opens and draws back 20 mm along its shaft; `taker` waits for it. With
+    `giver_servo`, the giver holds the needle's arc centre there by sight until it has let go."""
+    hinge, q = knot[:2]
+    # The taker looks at its own instrument: its jaws' hinge (TUBE_HINGE on its shaft) where the
+    # plan closes them on the wire, which the giver holds where the plan has it.
+    approach = add(hinge, mul(N_AXIS, -0.004))
+    taker.move(approach, q, 0.6, servo=(approach, taker.tube, TUBE_HINGE, taker.at))
+    taker.move(hinge, q, 0.4, servo=(hinge, taker.tube, TUBE_HINGE, approach))
+    giver.until(taker.t, servo=giver_servo)  # (not while both hold it: the two would pull it apart)
+    taker.hold(0.3, CLOSED, servo=(hinge, taker.tube, TUBE_HINGE, None))
     giver.until(taker.t)
     giver.hold(0.3, OPEN)
     giver.move(add(giver.at, mul(N_AXIS, -0.02)), giver.q, 0.5)
@@ -332,7 +358,7 @@ def paths():
     right_knots = turned_path(TROCAR_R, TIP_START + GRIP_R, TURN_R)
     left_knots = turned_path(TROCAR_L, tip_after + GRIP_L, TURN_L)
     # Right: closes on the needle where it lies, turns it through the pad, opens, draws back.
-    right = Path(*right_knots[0])
+    right = Path(*right_knots[0][:2], tube="tube_r")
     right.hold(0.2)
     right.hold(0.3, CLOSED)
     for k, centre in enumerate(CENTRES):
@@ -365,23 +391,23 @@ def paths():
                                 [(lifted, math.pi - math.pi * i / 36) for i in range(37)] +
                                 [(add(lifted, mul(sub(centre, lifted), i / 5)), 0.0) for i in range(1, 6)],
                                 centre)
-            rh, rq = over[0]
+            rh, rq = over[0][:2]
             right.until(left.t)
             right.travel(TROCAR_R, add(rh, mul(N_AXIS, -0.03)), rq, 1.5)
-            hand_over(right, left, over[0])
-            right.follow(over[:37])
-            right.follow(over[36:], 0.1)
-        right.follow(right_knots)
+            hand_over(right, left, over[0], giver_servo=lifted)
+            right.follow(over[:37], aim=SERVO_AIM)
+            right.follow(over[36:], 0.1, aim=SERVO_AIM)
+        right.follow(right_knots, aim=SERVO_AIM)
         t_out = right.t
         # Left: waits away from the pass, comes over the wire near the tip, closes, then turns.
-        lh, lq = left_knots[0]
+        lh, lq = left_knots[0][:2]
         if k == 0:
-            left = Path(add(lh, mul(N_AXIS, -0.03)), lq)
+            left = Path(add(lh, mul(N_AXIS, -0.03)), lq, tube="tube_l")
         else:
             left.travel(TROCAR_L, add(lh, mul(N_AXIS, -0.03)), lq, 1.0)
         left.until(t_out - 1.0)
         hand_over(left, right, left_knots[0])
-        left.follow(left_knots)
+        left.follow(left_knots, aim=SERVO_AIM)
     left.move(add(left.at, mul(N_AXIS, -0.02)), left.q, 0.5)
     right.until(left.t + 0.5)
     left.until(left.t + 0.5)
@@ -396,7 +422,16 @@ def device_block(name, trocar, path, node, cob, attach=None):
 source = "scripted"
 start = {{ position = {vec(start)}, orientation = {vec(q)}, jaw = {OPEN:.6f} }}
 """
-    for kind, to, q, spin, duration, jaw in path.segments:
+    if any(segment[6] is not None for segment in path.segments):
+        out += f"""
+[device.trajectory.servo]   # the hand looks at the needle it holds: its arc centre on each segment's servo_target
+body = "needle"
+point = {vec(NEEDLE_CENTRE_LOCAL)}   # the arc's centre in the needle's body frame
+latency = {SERVO_LATENCY}
+time_constant = {SERVO_TIME_CONSTANT}
+max_offset = {SERVO_MAX_OFFSET}
+"""
+    for kind, to, q, spin, duration, jaw, servo in path.segments:
         out += f"[[device.trajectory.segment]]\ntype = \"{kind}\"\n"
         if kind == "line":
             out += f"to = {vec(to)}\n"
@@ -405,6 +440,13 @@ start = {{ position = {vec(start)}, orientation = {vec(q)}, jaw = {OPEN:.6f} }}
             out += f"angular_velocity = {vec(spin)}\n"
         if jaw is not None:
             out += f"jaw = {jaw:.6f}\njaw_time = {JAW_TIME}\n"
+        if servo is not None and len(servo) == 4 and isinstance(servo[1], str):
+            target, body, point, frm = servo
+            out += f"servo_target = {vec(target)}\nservo_body = \"{body}\"\nservo_point = {vec(point)}\n"
+            if frm is not None:
+                out += f"servo_from = {vec(frm)}\n"
+        elif servo is not None:
+            out += f"servo_target = {vec(servo)}\n"
     return out
 
 
@@ -533,7 +575,7 @@ direction = [-0.957826, 0.0, 0.287348]   # pinned at the tail, away from the dri
     out.append(instrument("l", JAW_SPHERES))
     out.append(device_block("right", TROCAR_R, right, 1, 0, attach="tube_r"))
     out.append(device_block("left", TROCAR_L, left, 6, 5))
-    out.append("""
+    out.append(f"""
 # ---- graspers: a grasp starts below 35 deg with both jaws on the wire (they meet it at about 24 deg)
 
 [[grasp]]
@@ -543,6 +585,7 @@ close_angle_deg = 35.0
 open_angle_deg = 45.0
 stiffness = 2.0e4
 grip_radius = 0.003
+max_force = {GRIP_MAX_FORCE}
 tissue = false
 
 [[grasp]]
@@ -552,6 +595,7 @@ close_angle_deg = 35.0
 open_angle_deg = 45.0
 stiffness = 2.0e4
 grip_radius = 0.003
+max_force = {GRIP_MAX_FORCE}
 tissue = false
 
 [bus]

@@ -34,7 +34,7 @@ numen::sim::RunSummary run_suturing(const std::string& text) {
   return numen::sim::run_scene(scene, numen::sim::RunOptions{});
 }
 
-void print(const char* what, const numen::sim::RunSummary& s) {
+void print_suturing_run(const char* what, const numen::sim::RunSummary& s) {
   std::printf("%s: %lld punctures, %lld exits, %lld releases, %lld tunnels, %lld through; tip force at the "
               "puncture %.4f N; deviation max %.3f mm; entry %.3f mm, exit %.3f mm from the marks; thread "
               "tension max %.3f N; grasps %lld\n",
@@ -101,7 +101,7 @@ TEST(SuturingScene, BothPassesGoInAndOutAtTheirMarksAtTheThresholdWithoutATunnel
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_REQUIRE_DEFORMABLE();
   const numen::sim::RunSummary s = run_suturing(numen::test::shipped_scene_text("suturing.toml"));
-  print("scripted passes", s);
+  print_suturing_run("scripted passes", s);
   EXPECT_FALSE(s.nan_detected);
   EXPECT_EQ(s.exit_status, 0) << (s.exit_reasons.empty() ? "" : s.exit_reasons[0]);
   ASSERT_TRUE(s.needles);
@@ -137,7 +137,7 @@ TEST(SuturingFigures, TwentyPassesWithTheirPathsPerturbedByTwoMillimetres) {
   constexpr unsigned kSeeds = 20;
   for (unsigned seed = 1; seed <= kSeeds; ++seed) {
     const numen::sim::RunSummary s = run_suturing(perturbed(text, seed));
-    print(("seed " + std::to_string(seed)).c_str(), s);
+    print_suturing_run(("seed " + std::to_string(seed)).c_str(), s);
     EXPECT_FALSE(s.nan_detected) << "seed " << seed;
     EXPECT_EQ(s.needle_tunnels, 0) << "seed " << seed << ": in without a puncture";
     if (s.divergence.latched) {  // the run stopped there: not a pass, whatever it did before
@@ -157,16 +157,16 @@ TEST(SuturingFigures, TwentyPassesWithTheirPathsPerturbedByTwoMillimetres) {
   std::printf("perturbed by ±2 mm: %d of %u with both passes through (the first %d), %d of %u within 1 mm of "
               "all four marks, %d diverged\n",
               through, kSeeds, first_through, at_marks, kSeeds, diverged);
-  // The issue asks 10 of 10 with both passes through within 1 mm of their marks; measured
-  // (docs/suturing.md, "The suturing scene"): the first pass through in 20 of 20, both in 15 (of
-  // the five, three hands 2 mm high carry the arc over the pad at a glancing angle and the tip
-  // skims under the surface without puncturing; in two a driver's jaws miss the wire at a
-  // hand-over), 1 within 1 mm of all four marks (seed 7: a 2 mm offset of the hand moves the
-  // needle's entry by as much), none diverged. What this checks is that it does not get worse,
-  // and that no run tunnels.
+  // The issue asks 10 of 10 with both passes through within 1 mm of their marks. The drivers
+  // look at the needle they hold and at their own instrument as they come to take it (their
+  // servos, docs/suturing.md "The drivers' sight"): measured 20 of 20 both through and within
+  // 1 mm of all four marks (the largest 0.86 mm), none diverged. One run in twenty may be lost to
+  // a platform's rounding (these runs are chaotic: a grip that closes 0.1 mm aside goes another
+  // way), not more.
   EXPECT_GE(first_through, 19);
-  EXPECT_GE(through, 13);
-  EXPECT_LE(diverged, 1);
+  EXPECT_GE(through, 19);
+  EXPECT_GE(at_marks, 19);
+  EXPECT_EQ(diverged, 0);
 }
 
 // A thread shorter than the needle's arc (26 mm: the longest path the needle makes through the
