@@ -230,15 +230,8 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
       device_share_(make_device_share(scene, bus_, !extra_devices_.empty())),
       startup_settle_periods_(
           std::max<std::int64_t>(1, std::llround(kStartupSettle / scene.model.dt))) {
-  // The loop's devices (their buses' shares, NMT masters) in the harness's rig, the loop over it.
-  const platform::ControlLoopSettings settings =
-      with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
-                      spec_.real() || igtl_ != nullptr, scene);
-  assemble(settings, loop_devices(scene, *port_, device_, extra_devices_, settings));
-  if (multirate_.enabled() && scene.multirate) {
-    ghost_every_ = std::max<std::int64_t>(1, std::llround(1e-3 / scene.model.dt));
-  }
-  // The hands' sight: on the simulated bus only, where the emulated instruments are the hands.
+  // The hands' sight: on the simulated bus only, where the emulated instruments are the hands
+  // (refused before the loop is assembled: a throw here leaves nothing to take apart).
   for (std::size_t i = 0; i < num_devices(scene); ++i) {
     const std::optional<HandServoSpec>& spec = i == 0 ? scene.servo : scene.extra_devices[i - 1].servo;
     servos_.push_back(nullptr);
@@ -251,6 +244,14 @@ SceneRunner::SceneRunner(const Scene& scene, std::size_t trace_capacity, const B
                        " replaces (run it on the simulated bus)");
     servos_.back() = std::make_unique<HandServo>(*spec, scene.model.dt, name);
     (i == 0 ? instrument_ : *extra_instruments_[i - 1]).set_servo(servos_.back().get());
+  }
+  // The loop's devices (their buses' shares, NMT masters) in the harness's rig, the loop over it.
+  const platform::ControlLoopSettings settings =
+      with_live_start(control_loop_settings(realtime || spec_.real(), overrun_limit),
+                      spec_.real() || igtl_ != nullptr, scene);
+  assemble(settings, loop_devices(scene, *port_, device_, extra_devices_, settings));
+  if (multirate_.enabled() && scene.multirate) {
+    ghost_every_ = std::max<std::int64_t>(1, std::llround(1e-3 / scene.model.dt));
   }
   explicit_bound_ = platform::explicitly_bound_bodies(scene.binding, scene.model.num_bodies());
   std::vector<std::string> axis_names;
