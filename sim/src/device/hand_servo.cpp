@@ -11,10 +11,7 @@
 namespace numen::sim {
 namespace {
 
-std::string number(double v) {
-  std::string s = std::to_string(v);
-  return s;
-}
+std::string number(double v) { return std::to_string(v); }
 
 core::Vec3 span_target(const HandServoSpan& s, double t) noexcept {
   const double u = s.t1_s > s.t0_s ? std::clamp((t - s.t0_s) / (s.t1_s - s.t0_s), 0.0, 1.0) : 1.0;
@@ -37,18 +34,24 @@ void validate(const HandServoSpec& spec, const std::string& who) {
   double end = -INFINITY;
   for (std::size_t i = 0; i < spec.spans.size(); ++i) {
     const HandServoSpan& s = spec.spans[i];
-    if (s.body < 0) throw std::invalid_argument(who + ": servo span " + std::to_string(i) + "'s body not resolved");
-    if (!s.point.allFinite()) throw std::invalid_argument(who + ": servo span " + std::to_string(i) + "'s point must be finite");
+    if (s.body < 0)
+      throw std::invalid_argument(who + ": servo span " + std::to_string(i) +
+                                  "'s body not resolved");
+    if (!s.point.allFinite())
+      throw std::invalid_argument(who + ": servo span " + std::to_string(i) +
+                                  "'s point must be finite");
     if (!(std::isfinite(s.t0_s) && std::isfinite(s.t1_s) && s.t1_s > s.t0_s && s.t0_s >= end))
       throw std::invalid_argument(who + ": servo span " + std::to_string(i) +
                                   " must start at or after the previous one's end and last > 0 s");
     if (!s.target_start.allFinite() || !s.target_end.allFinite())
-      throw std::invalid_argument(who + ": servo span " + std::to_string(i) + " has a non-finite target");
+      throw std::invalid_argument(who + ": servo span " + std::to_string(i) +
+                                  " has a non-finite target");
     end = s.t1_s;
   }
 }
 
-HandServo::HandServo(HandServoSpec spec, double dt_s, const std::string& who) : spec_(std::move(spec)), dt_s_(dt_s) {
+HandServo::HandServo(HandServoSpec spec, double dt_s, const std::string& who)
+    : spec_(std::move(spec)), dt_s_(dt_s) {
   validate(spec_, who);
   if (!(std::isfinite(dt_s) && dt_s > 0.0))
     throw std::invalid_argument(who + ": servo period must be finite and > 0");
@@ -81,7 +84,7 @@ void HandServo::observe(double t_s, const core::Data& data) noexcept {
   error_line_[head_ % n] = e;
   planned_line_[head_ % n] = planned ? 1 : 0;
   ++head_;
-  if (head_ < n) return;  // nothing seen L ago yet
+  if (head_ < n) return;                     // nothing seen L ago yet
   const std::size_t seen = (head_ - n) % n;  // the entry written n − 1 periods ago
   if (!planned_line_[seen]) return;
   offset_ += (dt_s_ / spec_.settings.time_constant_s) * error_line_[seen];

@@ -66,15 +66,16 @@ PathSegment parse_segment(const TomlTable& s) {
   if (s.has("jaw")) seg.jaw = s.number("jaw");
   seg.jaw_time = s.number_or("jaw_time", 0.0);
   if (type == "line") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from", "servo_body", "servo_point", "from", "to", "duration"});
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from",
+                  "servo_body", "servo_point", "from", "to", "duration"});
     LineSegment l;
     l.from = optional_vec3(s, "from");
     l.to = s.vec3("to");
     l.duration = s.number("duration");
     seg.shape = l;
   } else if (type == "circle") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from", "servo_body", "servo_point", "centre", "radius", "axis",
-                  "period", "start_phase", "duration"});
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from",
+                  "servo_body", "servo_point", "centre", "radius", "axis", "period", "start_phase", "duration"});
     CircleSegment c;
     c.centre = optional_vec3(s, "centre");
     c.radius = s.number("radius");
@@ -84,14 +85,15 @@ PathSegment parse_segment(const TomlTable& s) {
     c.duration = s.number("duration");
     seg.shape = c;
   } else if (type == "hold") {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from", "servo_body", "servo_point", "position", "duration"});
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from",
+                  "servo_body", "servo_point", "position", "duration"});
     HoldSegment h;
     h.position = optional_vec3(s, "position");
     h.duration = s.number("duration");
     seg.shape = h;
   } else {
-    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from", "servo_body", "servo_point", "from", "to", "to_orientation",
-                  "step_time", "duration"});
+    s.allow_only({"type", "orientation", "angular_velocity", "jaw", "jaw_time", "servo_target", "servo_from",
+                  "servo_body", "servo_point", "from", "to", "to_orientation", "step_time", "duration"});
     StepSegment st;
     st.from = optional_vec3(s, "from");
     st.to = s.vec3("to");

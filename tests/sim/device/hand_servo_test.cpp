@@ -52,14 +52,16 @@ TEST(HandServo, AnErrorMovesTheHandAfterItsLatencyAtOneOverTheTimeConstant) {
   const core::Data d = data_at(core::Vec3::Zero());
   for (int k = 0; k < 5; ++k) {
     servo.observe(k * kDt, d);
-    EXPECT_EQ(servo.offset(), core::Vec3::Zero()) << "period " << k << ": not seen yet (L = 5 periods)";
+    EXPECT_EQ(servo.offset(), core::Vec3::Zero())
+        << "period " << k << ": not seen yet (L = 5 periods)";
   }
   for (int k = 5; k < 25; ++k) {
     servo.observe(k * kDt, d);
     const double expected = (k - 4) * (kDt / 0.1) * 0.001;  // (k − 4) updates of 10 µm
     EXPECT_NEAR(servo.offset().z(), expected, 1e-15) << "period " << k;
     EXPECT_NEAR(servo.offset().x(), 0.0, 1e-15);
-    EXPECT_NEAR(servo.offset().y(), 0.0, 1e-15) << "the point is the turned body's: its error is along z only";
+    EXPECT_NEAR(servo.offset().y(), 0.0, 1e-15)
+        << "the point is the turned body's: its error is along z only";
   }
   EXPECT_NEAR(servo.error_max_m(), 0.001, 1e-12);
   EXPECT_EQ(servo.saturated_periods(), 0);
@@ -94,7 +96,8 @@ TEST(HandServo, HoldsItsOffsetWithoutATargetAndClampsItAtItsMaxOffset) {
   s.spans[0].t1_s = 0.02;
   HandServo servo(s, kDt, "right");
   const core::Data d = data_at(core::Vec3::Zero());
-  const core::Data far = data_at(core::Vec3(0.0, 0.0, -0.05));  // seen only after the span: unplanned
+  const core::Data far =
+      data_at(core::Vec3(0.0, 0.0, -0.05));  // seen only after the span: unplanned
   int k = 0;
   for (; k < 20; ++k) servo.observe(k * kDt, d);
   for (; k < 22; ++k) servo.observe(k * kDt, far);  // the last two planned errors, seen L later

@@ -34,9 +34,9 @@ namespace numen::sim {
 
 /// A servo's gains (`[device.trajectory.servo]`; docs/scenes.md).
 struct HandServoSettings {
-  double latency_s = 0.002;        ///< L (s, in [0, kMaxServoLatency]): the eye and hand's delay.
-  double time_constant_s = 0.05;   ///< T (s, > 0): the integral's time constant.
-  double max_offset_m = 0.004;     ///< o_max (m, > 0): the largest correction of the hand.
+  double latency_s = 0.002;       ///< L (s, in [0, kMaxServoLatency]): the eye and hand's delay.
+  double time_constant_s = 0.05;  ///< T (s, > 0): the integral's time constant.
+  double max_offset_m = 0.004;    ///< o_max (m, > 0): the largest correction of the hand.
 };
 
 /// The longest latency a servo takes (s): its delay line is latency / dt + 1 samples.
