@@ -26,6 +26,11 @@ needle about that axis mapped onto what the trocar allows (the roll taken from i
 so that the arc's centre stays put); the needle's plane then tilts by at most the shaft's swing,
 about atan(8.3 mm / 150 mm) = 3 deg.
 
+The drivers look (each device's `[device.trajectory.servo]`, docs/suturing.md "The drivers'
+sight"): the one holding the needle moves its hand until the needle's arc centre is where its
+script wants it (each segment's `servo_target`), and one coming to take the needle until its own
+jaws' hinge is where the script closes them on the wire.
+
 Frame: the pad's top face at z = 0, gravity along -z, the trocars up and to +x. Units m, s, rad.
 """
 
@@ -460,7 +465,9 @@ HEADER = """# numen suturing: two suture passes (docs/suturing.md, "The suturing
 # punctures the pad at the entry mark, runs under the surface and comes out at the exit mark; the
 # left driver takes the wire near the tip, the right lets go and draws back, the left rolls the
 # needle on until its tail has left the pad. The left then hands the needle back to the right over
-# the second pass's marks, 6 mm along the wound, and the pass is made again there. The summary's
+# the second pass's marks, 6 mm along the wound, and the pass is made again there. Each driver
+# looks at the needle it holds and moves its hand until the needle's arc centre is where its
+# script wants it (its [device.trajectory.servo], each segment's servo_target). The summary's
 # needle figures (docs/outputs.md, `needle.*`): punctures, exits, tunnels, the tip force at the
 # puncture against its threshold, the deviation from the arc, each pass's entry and exit errors
 # from its marks.
