@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "numen/core/data.hpp"
+
 namespace numen::sim {
 namespace {
 

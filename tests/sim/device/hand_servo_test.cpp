@@ -13,6 +13,7 @@
 #include <string>
 
 #include "alloc_counter.hpp"
+#include "numen/core/data.hpp"
 
 namespace numen::sim {
 namespace {

@@ -27,8 +27,11 @@
 #include <string>
 #include <vector>
 
-#include "numen/core/data.hpp"
 #include "numen/core/types.hpp"
+
+namespace numen::core {
+struct Data;  // data.hpp: observe() reads its bodies
+}
 
 namespace numen::sim {
 
