@@ -60,6 +60,7 @@ HandServo::HandServo(HandServoSpec spec, double dt_s, const std::string& who)
   const auto n = static_cast<std::size_t>(std::llround(spec_.settings.latency_s / dt_s)) + 1;
   error_line_.assign(n, core::Vec3::Zero());
   planned_line_.assign(n, 0);
+  offset_line_.assign(n, core::Vec3::Zero());
 }
 
 bool HandServo::target_at(double t_s, core::Vec3& target) const noexcept {
@@ -85,11 +86,15 @@ void HandServo::observe(double t_s, const core::Data& data) noexcept {
   const std::size_t n = error_line_.size();
   error_line_[head_ % n] = e;
   planned_line_[head_ % n] = planned ? 1 : 0;
+  offset_line_[head_ % n] = offset_;
   ++head_;
   if (head_ < n) return;                     // nothing seen L ago yet
   const std::size_t seen = (head_ - n) % n;  // the entry written n − 1 periods ago
   if (!planned_line_[seen]) return;
-  offset_ += (dt_s_ / spec_.settings.time_constant_s) * error_line_[seen];
+  const core::Vec3 error = spec_.settings.predict
+                               ? core::Vec3(error_line_[seen] - (offset_ - offset_line_[seen]))  // less what it did since
+                               : error_line_[seen];
+  offset_ += (dt_s_ / spec_.settings.time_constant_s) * error;
   const double o = offset_.norm();
   if (o > spec_.settings.max_offset_m) {
     offset_ *= spec_.settings.max_offset_m / o;

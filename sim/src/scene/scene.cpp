@@ -181,13 +181,14 @@ std::optional<ServoDraft> parse_servo(const TomlTable& t, const std::vector<Toml
                                    "] (its body and gains; docs/scenes.md)");
     return std::nullopt;
   }
-  table->allow_only({"body", "point", "latency", "time_constant", "max_offset"});
+  table->allow_only({"body", "point", "latency", "time_constant", "max_offset", "predict"});
   ServoDraft d{*table, {}, {}, {}};
   const std::string body = table->string("body");
   const Vec3 point = table->vec3_or("point", Vec3::Zero());
   d.spec.settings.latency_s = table->number_in("latency", 0.0, kMaxServoLatency, d.spec.settings.latency_s);
   d.spec.settings.time_constant_s = table->number_in("time_constant", 1e-6, kInf, d.spec.settings.time_constant_s);
   d.spec.settings.max_offset_m = table->number_in("max_offset", 1e-9, 1.0, d.spec.settings.max_offset_m);
+  d.spec.settings.predict = table->boolean_or("predict", false);
   for (std::size_t i = 0; i < segs.size(); ++i) {
     if (!segs[i].has("servo_target")) continue;
     HandServoSpan span;

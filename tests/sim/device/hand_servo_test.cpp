@@ -11,6 +11,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "alloc_counter.hpp"
 #include "numen/core/data.hpp"
@@ -127,6 +128,35 @@ TEST(HandServo, AHandWhoseBodySagsIsMovedUntilTheBodyIsOnItsTarget) {
   }
   EXPECT_NEAR(d.bodies[0].position.z(), 0.0, 1e-7) << "on its target after 20 time constants";
   EXPECT_NEAR(servo.offset().z(), 0.002, 1e-7);
+}
+
+// A hand 150 ms late: integrating what it sees overshoots a 30 ms time constant and rings; a
+// hand that takes off what it did since it saw (predict, a Smith predictor) settles as a hand
+// without the delay would, 150 ms later.
+TEST(HandServo, APredictingHandSettlesDespiteItsLatency) {
+  const auto run = [](bool predict) {
+    HandServoSpec s = spec(0.15, 0.03, 0.01);
+    s.settings.predict = predict;
+    s.spans[0].point = core::Vec3::Zero();
+    s.spans[0].t1_s = 3.0;
+    s.spans[0].target_start = s.spans[0].target_end = core::Vec3::Zero();
+    HandServo servo(s, kDt, "right");
+    const core::Vec3 sag(0.0, 0.0, -0.002);
+    core::Data d = data_at(sag);
+    double overshoot = 0.0;
+    for (int k = 0; k < 2000; ++k) {
+      servo.observe(k * kDt, d);
+      d.bodies[0].position = servo.offset() + sag;
+      overshoot = std::max(overshoot, d.bodies[0].position.z());
+    }
+    return std::pair{overshoot, d.bodies[0].position.z()};
+  };
+  const auto [ringing, ringing_end] = run(false);
+  EXPECT_GT(ringing, 0.001) << "the blind integral overshoots the target by more than half the sag";
+  const auto [settled, settled_end] = run(true);
+  EXPECT_LT(settled, 1e-9) << "never past the target";
+  EXPECT_NEAR(settled_end, 0.0, 1e-7) << "on it after 2 s";
+  (void)ringing_end;
 }
 
 TEST(HandServo, RefusesSettingsOutOfRange) {

@@ -36,6 +36,9 @@ TEST(SceneServo, EachSegmentWithATargetIsASpanFromThePreviousTarget) {
   EXPECT_DOUBLE_EQ(s.servo->settings.time_constant_s,
                    numen::sim::HandServoSettings{}.time_constant_s);
   EXPECT_DOUBLE_EQ(s.servo->settings.max_offset_m, numen::sim::HandServoSettings{}.max_offset_m);
+  EXPECT_FALSE(s.servo->settings.predict);
+  const numen::sim::Scene p = numen::sim::load_scene(dir.write("p.toml", with_servo("tool", "predict = true\n")));
+  EXPECT_TRUE(p.servo->settings.predict);
   ASSERT_EQ(s.servo->spans.size(), 2u);
   for (const numen::sim::HandServoSpan& span : s.servo->spans) {
     EXPECT_EQ(span.body, 0) << "the table's body";

@@ -17,7 +17,12 @@
 /// Magazine 13(4), 2006: the error in the task space, the camera's pose estimate standing in
 /// for what the simulation gives exactly here), with a pure delay L for the eye and the hand.
 /// A time constant T well above L keeps the loop stable (the phase L adds at the crossover
-/// 1/T is L/T rad).
+/// 1/T is L/T rad). With `predict`, the hand also knows what it did since it saw, as an
+/// internal model of its own arm would (Miall, Weir, Wolpert & Stein, "Is the cerebellum a
+/// Smith predictor?", J. Motor Behavior 25(3), 1993): it integrates e(t − L) − (o(t) − o(t − L)),
+/// a Smith predictor for a hand that carries what it holds (Smith, "Closer control of loops with
+/// dead time", Chem. Eng. Progress 53(5), 1957), so that T need not stay above L; what it
+/// cannot know is the drift of the last L.
 ///
 /// Frames and units: world (m), body frame (m), times (s). Construction allocates the delay
 /// line; observe() is noexcept and allocation free.
@@ -40,6 +45,9 @@ struct HandServoSettings {
   double latency_s = 0.002;       ///< L (s, in [0, kMaxServoLatency]): the eye and hand's delay.
   double time_constant_s = 0.05;  ///< T (s, > 0): the integral's time constant.
   double max_offset_m = 0.004;    ///< o_max (m, > 0): the largest correction of the hand.
+  /// A Smith predictor (see the file comment): the error seen L ago less the hand's own
+  /// corrections since, e(t − L) − (o(t) − o(t − L)); false: e(t − L) as seen.
+  bool predict = false;
 };
 
 /// The longest latency a servo takes (s): its delay line is latency / dt + 1 samples.
@@ -102,6 +110,7 @@ class HandServo {
   double dt_s_;
   std::vector<core::Vec3> error_line_;  // the errors of the last n periods (ring)
   std::vector<char> planned_line_;      // whether a target was planned then
+  std::vector<core::Vec3> offset_line_;  // the offset when each error was seen (predict)
   std::size_t head_ = 0;                // periods observed
   std::size_t span_ = 0;                // the first span not yet ended (a cursor: time grows)
   core::Vec3 offset_ = core::Vec3::Zero();
