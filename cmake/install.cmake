@@ -37,11 +37,51 @@ install(TARGETS numen RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 # header of include/ that is not listed is an internal of that layer (used by its .cpp files,
 # its tests and the `numen` command) and is not installed. tests/install/ compiles every
 # installed header on its own against the installed prefix.
+# Each listed header is also recorded (NUMEN_INSTALLED_HEADERS, base_dir|header) for the closure
+# check at the end of this file.
 function(numen_install_headers base_dir)
   foreach(_h IN LISTS ARGN)
     get_filename_component(_d ${_h} DIRECTORY)
     install(FILES ${base_dir}/${_h} DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/${_d})
+    set_property(GLOBAL APPEND PROPERTY NUMEN_INSTALLED_HEADERS "${base_dir}|${_h}")
   endforeach()
+endfunction()
+
+# The lists must be closed under #include "numen/...": an installed header that includes one
+# left off the list compiles here and breaks every program built on the installed prefix.
+# Checked when CMake configures (seconds), so a forgotten entry fails the build's first step
+# rather than tests/install at the end of CI. Generated headers are read from the binary dir
+# and so need configure_file to have run first: the check runs after all layers are listed.
+function(numen_check_installed_headers_closed)
+  get_property(_entries GLOBAL PROPERTY NUMEN_INSTALLED_HEADERS)
+  set(_installed "")
+  foreach(_e IN LISTS _entries)
+    string(REPLACE "|" ";" _parts "${_e}")
+    list(GET _parts 1 _h)
+    list(APPEND _installed ${_h})
+  endforeach()
+  set(_missing "")
+  foreach(_e IN LISTS _entries)
+    string(REPLACE "|" ";" _parts "${_e}")
+    list(GET _parts 0 _base)
+    list(GET _parts 1 _h)
+    if(NOT EXISTS ${_base}/${_h})
+      list(APPEND _missing "${_h} (listed, but ${_base}/${_h} does not exist)")
+      continue()
+    endif()
+    file(STRINGS ${_base}/${_h} _lines REGEX "^[ \t]*#[ \t]*include[ \t]+\"numen/")
+    foreach(_line IN LISTS _lines)
+      string(REGEX REPLACE "^[ \t]*#[ \t]*include[ \t]+\"([^\"]+)\".*$" "\\1" _inc "${_line}")
+      if(NOT _inc IN_LIST _installed)
+        list(APPEND _missing "${_inc} (included by ${_h})")
+      endif()
+    endforeach()
+  endforeach()
+  if(_missing)
+    list(JOIN _missing "\n  " _text)
+    message(FATAL_ERROR "cmake/install.cmake: installed headers include headers that are not "
+                        "installed; add them to the layer's list (or stop including them):\n  ${_text}")
+  endif()
 endfunction()
 
 # core: the model, the state, one step and its stages, the laws a study calls on its own.
@@ -145,6 +185,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/input/jigsaws.hpp numen/sim/input/pointer_path.hpp numen/sim/input/scripted_path.hpp
   numen/sim/input/shipped_files.hpp numen/sim/input/trajectory.hpp
   numen/sim/device/admittance_hand.hpp numen/sim/device/axis_plant.hpp
+  numen/sim/device/hand_servo.hpp
   numen/sim/device/device_process.hpp numen/sim/device/hand.hpp
   numen/sim/device/igtl_replay.hpp numen/sim/device/plant_motion.hpp
   numen/sim/device/sdo_session.hpp numen/sim/device/simulated_instrument.hpp
@@ -160,6 +201,8 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/sim/include
   numen/sim/view/igtl_world_server.hpp
   numen/sim/view/view_output.hpp numen/sim/view/view_recording.hpp numen/sim/view/view_scene.hpp
   numen/sim/view/view_server.hpp)
+
+numen_check_installed_headers_closed()
 
 # --- Shipped files: scenes and data side by side (a scene's "../data/..." resolves), the
 # viewer page; found by an installed `numen` relative to itself (sim/src/input/shipped_files.cpp).

@@ -9,11 +9,11 @@
 #include <utility>
 
 #include "numen/core/data.hpp"
+#include "numen/sim/input/input_error.hpp"
 
 namespace numen::sim {
 namespace {
 
-std::string number(double v) { return std::to_string(v); }
 
 core::Vec3 span_target(const HandServoSpan& s, double t) noexcept {
   const double u = s.t1_s > s.t0_s ? std::clamp((t - s.t0_s) / (s.t1_s - s.t0_s), 0.0, 1.0) : 1.0;
@@ -25,14 +25,14 @@ core::Vec3 span_target(const HandServoSpan& s, double t) noexcept {
 void validate(const HandServoSpec& spec, const std::string& who) {
   const HandServoSettings& g = spec.settings;
   if (!(std::isfinite(g.latency_s) && g.latency_s >= 0.0 && g.latency_s <= kMaxServoLatency))
-    throw std::invalid_argument(who + ": servo latency must be in [0, " + number(kMaxServoLatency) +
-                                "] s (got " + number(g.latency_s) + ")");
+    throw std::invalid_argument(who + ": servo latency must be in [0, " + format_input_number(kMaxServoLatency) +
+                                "] s (got " + format_input_number(g.latency_s) + ")");
   if (!(std::isfinite(g.time_constant_s) && g.time_constant_s > 0.0))
     throw std::invalid_argument(who + ": servo time_constant must be finite and > 0 (got " +
-                                number(g.time_constant_s) + ")");
+                                format_input_number(g.time_constant_s) + ")");
   if (!(std::isfinite(g.max_offset_m) && g.max_offset_m > 0.0))
     throw std::invalid_argument(who + ": servo max_offset must be finite and > 0 (got " +
-                                number(g.max_offset_m) + ")");
+                                format_input_number(g.max_offset_m) + ")");
   double end = -INFINITY;
   for (std::size_t i = 0; i < spec.spans.size(); ++i) {
     const HandServoSpan& s = spec.spans[i];
@@ -53,7 +53,7 @@ void validate(const HandServoSpec& spec, const std::string& who) {
 }
 
 HandServo::HandServo(HandServoSpec spec, double dt_s, const std::string& who)
-    : spec_(std::move(spec)), dt_s_(dt_s) {
+    : spec_(std::move(spec)), device_(who), dt_s_(dt_s) {
   validate(spec_, who);
   if (!(std::isfinite(dt_s) && dt_s > 0.0))
     throw std::invalid_argument(who + ": servo period must be finite and > 0");

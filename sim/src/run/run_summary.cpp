@@ -106,14 +106,13 @@ std::string format_device_line(const DeviceRunSummary& d) {
 }
 
 void SceneRunner::summarize_servos(RunSummary& s) const {
-  for (std::size_t i = 0; i < servos_.size(); ++i) {
-    const HandServo* servo = servos_[i].get();
+  for (const std::unique_ptr<HandServo>& servo : servos_) {
     if (!servo) continue;
     s.servos = true;
     s.servo_offset_max_mm = std::max(s.servo_offset_max_mm, 1e3 * servo->offset_max_m());
     s.servo_error_max_mm = std::max(s.servo_error_max_mm, 1e3 * servo->error_max_m());
     s.servo_saturated_periods += servo->saturated_periods();
-    const std::string& device = i == 0 ? scene_->device.name : scene_->extra_devices[i - 1].device.name;
+    const std::string& device = servo->device();
     std::ostringstream os;
     os << std::fixed << std::setprecision(3) << device << " watches " << servo->spec().body_name
        << ": offset max " << 1e3 * servo->offset_max_m() << " mm (at most "

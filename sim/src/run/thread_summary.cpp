@@ -17,7 +17,7 @@ void accumulate_thread_figures(const core::Data& data, RunSummary& s) noexcept {
   for (const core::ThreadState& t : data.threads) {
     unconverged = unconverged || !t.output.converged;
     if (t.output.max_tension > s.thread_tension_max_n || s.thread_tension_max_s < 0.0) {
-      s.thread_tension_max_n = std::max(s.thread_tension_max_n, t.output.max_tension);
+      s.thread_tension_max_n = t.output.max_tension;  // (≥ 0: the first step's is at least the 0 it starts at)
       s.thread_tension_max_s = data.time;
     }
     s.thread_stretch_max = std::max(s.thread_stretch_max, t.output.max_stretch);

@@ -104,9 +104,12 @@ class HandServo {
   /// The first trajectory time (s) the offset was clamped; −1 if never.
   double first_saturation_s() const noexcept { return first_saturation_s_; }
   const HandServoSpec& spec() const noexcept { return spec_; }
+  /// The device whose hand it moves (`who` at construction), for messages.
+  const std::string& device() const noexcept { return device_; }
 
  private:
   HandServoSpec spec_;
+  std::string device_;
   double dt_s_;
   std::vector<core::Vec3> error_line_;  // the errors of the last n periods (ring)
   std::vector<char> planned_line_;      // whether a target was planned then
