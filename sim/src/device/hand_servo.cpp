@@ -14,7 +14,6 @@
 namespace numen::sim {
 namespace {
 
-
 core::Vec3 span_target(const HandServoSpan& s, double t) noexcept {
   const double u = s.t1_s > s.t0_s ? std::clamp((t - s.t0_s) / (s.t1_s - s.t0_s), 0.0, 1.0) : 1.0;
   return (1.0 - u) * s.target_start + u * s.target_end;
