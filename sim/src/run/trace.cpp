@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "numen/core/needle_puncture.hpp"
+#include "numen/core/thread.hpp"
 #include "numen/sim/run/trace_columns.hpp"
 
 namespace numen::sim {
@@ -54,6 +56,21 @@ TraceRecord make_trace_record(const core::Data& data, int held, int tool_contact
     r.net_strain_max = std::max(r.net_strain_max, n.max_strain);
   }
   r.solver_residual = data.solver_residual;
+  for (const core::ThreadState& t : data.threads) {
+    const core::ThreadOutput& o = t.output;
+    r.thread_tension_n = std::max(r.thread_tension_n, o.max_tension);
+    r.thread_stretch = std::max(r.thread_stretch, o.max_stretch);
+    r.thread_contacts += o.body_contacts + o.obstacle_contacts + o.tissue_contacts + o.self_contacts;
+    r.thread_newton_iterations = std::max(r.thread_newton_iterations, o.iterations);
+    r.thread_unconverged += o.converged ? 0 : 1;
+  }
+  for (std::size_t i = 0; i < data.needles.size(); ++i) {
+    const core::NeedleState& n = data.needles[i];
+    const double tip = n.tip_force + 0.0;  // −F · t of no force is −0: written as 0
+    r.needle_tip_force_n = i == 0 ? tip : std::max(r.needle_tip_force_n, tip);
+    r.needle_points += n.num_punctures;
+    if (n.event != core::PunctureEvent::kNone) r.needle_event = static_cast<int>(n.event);
+  }
   return r;
 }
 

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include <vector>
 
 #include "build_features.hpp"
+#include "csv_lines.hpp"
 #include "numen/sim/run/run.hpp"
 #include "numen/sim/run/run_summary.hpp"
 #include "numen/sim/run/run_verdict.hpp"
@@ -27,11 +29,21 @@ namespace {
 
 constexpr double kThreshold = 1.0;  // N: the scene's puncture_force
 
-/// The shipped suturing scene run to its end, its text first passed through `edit`.
-numen::sim::RunSummary run_suturing(const std::string& text) {
+/// The shipped suturing scene run to its end, its text first passed through `edit`; with a
+/// `trace` path, its per-step trace written there.
+numen::sim::RunSummary run_suturing(const std::string& text, const std::string& trace = "") {
   numen::test::TempDir dir;
   const numen::sim::Scene scene = numen::sim::load_scene(dir.write("suturing.toml", text));
-  return numen::sim::run_scene(scene, numen::sim::RunOptions{});
+  numen::sim::RunOptions options;
+  options.trace_path = trace;
+  return numen::sim::run_scene(scene, options);
+}
+
+/// The column `name` of a trace's header `names`, or fails.
+std::size_t column(const std::vector<std::string>& names, const std::string& name) {
+  const auto it = std::find(names.begin(), names.end(), name);
+  EXPECT_NE(it, names.end()) << name;
+  return static_cast<std::size_t>(it - names.begin());
 }
 
 void print_suturing_run(const char* what, const numen::sim::RunSummary& s) {
@@ -100,7 +112,9 @@ std::string perturbed(const std::string& text, unsigned seed) {
 TEST(SuturingScene, BothPassesGoInAndOutAtTheirMarksAtTheThresholdWithoutATunnel) {
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_REQUIRE_DEFORMABLE();
-  const numen::sim::RunSummary s = run_suturing(numen::test::shipped_scene_text("suturing.toml"));
+  numen::test::TempDir dir;
+  const std::string trace = (dir / "suturing.csv").string();
+  const numen::sim::RunSummary s = run_suturing(numen::test::shipped_scene_text("suturing.toml"), trace);
   print_suturing_run("scripted passes", s);
   EXPECT_FALSE(s.nan_detected);
   EXPECT_EQ(s.exit_status, 0) << (s.exit_reasons.empty() ? "" : s.exit_reasons[0]);
@@ -127,6 +141,47 @@ TEST(SuturingScene, BothPassesGoInAndOutAtTheirMarksAtTheThresholdWithoutATunnel
   // with the compressed segments' part across in the matrix from the second iteration on, 7 045
   // with it dropped (docs/thread.md, "The compressed segments' part across").
   EXPECT_LT(s.thread_newton_not_converged_steps, 1000);
+
+  // The trace's thread and needle columns (docs/outputs.md) tell the same story step by step.
+  const std::vector<std::string> lines = numen::test::read_lines(trace);
+  ASSERT_GT(lines.size(), 2u);
+  const std::vector<std::string> names = numen::test::split_csv(lines[0]);
+  const std::size_t time = column(names, "time_s"), tension = column(names, "thread_tension_n"),
+                    stretch = column(names, "thread_stretch"), unconverged = column(names, "thread_unconverged"),
+                    iterations = column(names, "thread_newton_iterations"),
+                    tip = column(names, "needle_tip_force_n"), points = column(names, "needle_points"),
+                    event = column(names, "needle_event");
+  double tension_max = 0.0, tension_max_s = -1.0, stretch_max = 0.0, last_puncture_tip = -1.0;
+  int punctures = 0, exits = 0, points_max = 0, iterations_max = 0;
+  std::int64_t unconverged_steps = 0;
+  for (std::size_t i = 1; i < lines.size(); ++i) {
+    const std::vector<std::string> row = numen::test::split_csv(lines[i]);
+    ASSERT_EQ(row.size(), names.size()) << "row " << i;
+    if (std::stod(row[tension]) > tension_max) {
+      tension_max = std::stod(row[tension]);
+      tension_max_s = std::stod(row[time]);
+    }
+    stretch_max = std::max(stretch_max, std::stod(row[stretch]));
+    unconverged_steps += std::stoi(row[unconverged]);
+    iterations_max = std::max(iterations_max, std::stoi(row[iterations]));
+    points_max = std::max(points_max, std::stoi(row[points]));
+    const int e = std::stoi(row[event]);
+    if (e == 1) {
+      ++punctures;
+      last_puncture_tip = std::stod(row[tip]);
+    }
+    exits += e == 2 ? 1 : 0;
+  }
+  EXPECT_NEAR(tension_max, s.thread_tension_max_n, 1e-6 * s.thread_tension_max_n);
+  EXPECT_NEAR(tension_max_s, s.thread_tension_max_s, 1e-9);
+  EXPECT_NEAR(stretch_max, s.thread_stretch_max, 1e-6 * s.thread_stretch_max);
+  EXPECT_EQ(unconverged_steps, s.thread_newton_not_converged_steps);
+  EXPECT_GE(iterations_max, 1);
+  EXPECT_LE(iterations_max, 6);
+  EXPECT_EQ(punctures, 2);
+  EXPECT_EQ(exits, 2);
+  EXPECT_EQ(points_max, 2) << "an entry and its exit held at once";
+  EXPECT_NEAR(last_puncture_tip, s.needle_puncture_tip_force_n, 1e-6) << "the second puncture's step";
 }
 
 TEST(SuturingFigures, TwentyPassesWithTheirPathsPerturbedByTwoMillimetres) {

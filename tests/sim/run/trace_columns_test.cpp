@@ -68,6 +68,15 @@ TraceRecord distinct_record() {
   r.net_tie_stretch_mm = next();
   r.net_strain_max = next();
   r.solver_residual = next();
+  r.grasps_held = 9;
+  r.thread_tension_n = next();
+  r.thread_stretch = next();
+  r.thread_contacts = 10;
+  r.thread_newton_iterations = 11;
+  r.thread_unconverged = 12;
+  r.needle_tip_force_n = next();
+  r.needle_points = 13;
+  r.needle_event = 14;
   r.num_extra_devices = 1;  // one device beside device 0: its columns "…@1" (no names given)
   r.devices[0].sample_valid = true;
   const auto single = [&next] { return static_cast<float>(next()); };  // 0.125 steps: exact in a float

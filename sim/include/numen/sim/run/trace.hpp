@@ -81,6 +81,22 @@ struct TraceRecord {
   /// Graspers holding a body, a thread or tissue after the step (core::GraspState::holding(); a grasp, a
   /// release or a slip changes it; the summary's grasp.events names each).
   int grasps_held = 0;
+  // Threads and needles (zero without them; docs/thread.md, docs/suturing.md): all threads or
+  // needles together.
+  double thread_tension_n = 0.0;   ///< Largest segment tension after the step (N).
+  double thread_stretch = 0.0;     ///< Largest segment strain (l − l0)/l0 after the step.
+  /// Contacts of the threads this step: with bodies' spheres, obstacles, tissue and themselves.
+  int thread_contacts = 0;
+  int thread_newton_iterations = 0;  ///< Most Newton iterations a thread's step took.
+  /// Threads whose step's Newton iteration ran out of its iterations (core::ThreadOutput::converged).
+  int thread_unconverged = 0;
+  /// Force of the tissue on a needle's tip against its tangent this step (N; > 0 resists the tip
+  /// going forward; core::NeedleState::tip_force), the largest of the needles.
+  double needle_tip_force_n = 0.0;
+  int needle_points = 0;  ///< Puncture points the needles hold after the step (entries and exits).
+  /// The step's needle event (core::PunctureEvent: 0 none, 1 puncture, 2 exit, 3 release; the
+  /// last needle's with one).
+  int needle_event = 0;
   /// Devices 1 .. num_extra_devices of a scene of several, in order (empty for one device).
   std::array<DeviceTraceRecord, kMaxTraceExtraDevices> devices{};
   int num_extra_devices = 0;
