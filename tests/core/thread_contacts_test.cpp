@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <utility>
 #include <vector>
 
 #include "linalg/thread_band.hpp"
@@ -141,6 +143,59 @@ TEST(ThreadContacts, ABodysSpheresFindTheSegmentsTheyTouchAcrossTheRuns) {
   EXPECT_EQ(expected, 6);  // 2 + 1 + 2 + 1 + 0
   core::step(m, d);
   EXPECT_EQ(d.threads[0].output.body_contacts, expected);
+}
+
+// A sphere a segment touched in the last step and no longer touches at this step's start is kept
+// as a contact (core/src/thread/thread_contacts.cpp; docs/thread.md "Contacts with bodies"): a
+// thread coming at it at 1.5 m/s from 0.09 mm away (as a taut thread straightens where a jaw has
+// just receded: the suturing scene at 25.010 s) stops at its surface. The same sphere at the same
+// gap, never touched before, is found only at the next step's start, 1.4 mm deep.
+TEST(ThreadContacts, ASphereTouchedInTheLastStepStopsTheThreadComingBackAtIt) {
+  core::ThreadModel t;
+  t.segments = 40;
+  t.length = 0.04;
+  t.start = Vec3::Zero();
+  const double radius = 2e-3;
+  core::Model m = test::thread_model(t, [&](core::Model& mm) {
+    mm.threads[0].tie_end.body = -1;
+    mm.threads[0].tie_end.point = Vec3(t.length, 0.0, 0.0);
+    test::add_thread_test_body(mm, 1e3, 1.0, Vec3(0.02, 0.0, -0.1), radius);  // heavy: the thread moves it by nothing
+  });
+  const double rt = m.threads[0].radius;
+  // `touch_first`: a first step with the sphere's top 0.01 mm into the thread; else with it far.
+  const auto run = [&](bool touch_first) {
+    core::Data d = core::make_data(m);
+    d.bodies[0].position = touch_first ? Vec3(0.02, 0.0, -radius - rt + 0.01e-3) : Vec3(0.02, 0.0, -0.1);
+    core::step(m, d);
+    EXPECT_EQ(d.threads[0].output.body_contacts, touch_first ? 2 : 0);
+    // Then 0.09 mm below the thread's lowest point, the thread's middle coming down at 1.5 m/s.
+    double lowest = 0.0;
+    for (const Vec3& x : d.threads[0].position) lowest = std::min(lowest, x.z());
+    d.bodies[0].position = Vec3(0.02, 0.0, lowest - radius - rt - 0.09e-3);
+    for (int i = 15; i <= 25; ++i) d.threads[0].velocity[static_cast<std::size_t>(i)] = Vec3(0.0, 0.0, -1.5);
+    core::step(m, d);
+    EXPECT_EQ(d.status & core::kNonFinite, 0u);
+    const int kept = d.threads[0].output.kept_contacts;
+    double depth = 0.0;
+    const core::ThreadState& st = d.threads[0];
+    for (int sgm = 0; sgm < t.segments; ++sgm) {
+      const Vec3 p = st.position[static_cast<std::size_t>(sgm)], q = st.position[static_cast<std::size_t>(sgm) + 1];
+      const double u = std::clamp((d.bodies[0].position - p).dot(q - p) / (q - p).squaredNorm(), 0.0, 1.0);
+      depth = std::max(depth, radius + rt - (p + u * (q - p) - d.bodies[0].position).norm());
+    }
+    const double moved = lowest - d.threads[0].position[20].z();  // the middle's way down (m)
+    std::printf("%s: the middle %.4f mm down, %.4f mm into the sphere, %d kept contacts pushing at "
+                "the step's end, %d Newton iterations (converged %d)\n",
+                touch_first ? "touched before" : "never touched", 1e3 * moved, 1e3 * depth, kept,
+                d.threads[0].output.iterations, d.threads[0].output.converged ? 1 : 0);
+    return std::pair{moved, depth};
+  };
+  const auto [moved, depth] = run(true);
+  EXPECT_LT(depth, 0.05e-3) << "m: the kept contact stops it at the sphere";
+  EXPECT_LT(moved, 0.1e-3) << "m: at most the 0.09 mm gap and the penalty's depth";
+  const auto [moved_never, depth_never] = run(false);
+  EXPECT_GT(depth_never, 0.5e-3) << "m: without the contact the step carries it in";
+  EXPECT_GT(moved_never, 1e-3);
 }
 
 }  // namespace

@@ -136,7 +136,10 @@ void reset_data(const Model& model, Data& data) noexcept {
   }
   data.device_wrench = Wrench{};
   reset_nodes(model, data);
-  for (std::size_t i = 0; i < data.threads.size(); ++i) reset_thread(model.threads[i], data.threads[i]);
+  for (std::size_t i = 0; i < data.threads.size(); ++i) {
+    reset_thread(model.threads[i], data.threads[i]);
+    data.scratch->threads[i].forget_touches();
+  }
   for (JointPrescription& p : data.joint_prescribed) p = JointPrescription{};
   for (JointState& j : data.joints) j = JointState{};
   for (Vec6& v : data.scratch->solver.delta) v.setZero();  // Δu_prev of the joint rows (joint_system.hpp)

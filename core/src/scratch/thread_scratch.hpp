@@ -20,6 +20,9 @@ struct ThreadModel;
 /// a run's box before its segments' (200 segments: 25 runs).
 inline constexpr int kThreadSegmentRun = 8;
 
+/// Body spheres a segment's touches are remembered for, per step (ThreadScratch::touched).
+inline constexpr int kThreadTouchedSpheres = 4;
+
 /// A spring-damper between a point of the thread (w_a x_a + w_b x_b, blocks a, b of the band)
 /// and an outside point moving at `target_velocity` (a body's sphere, an obstacle, the other
 /// segment of a self-contact, an eyelet): force `force` on the thread point at the step's start,
@@ -45,6 +48,16 @@ struct ThreadPointTerm {
   /// held node (GraspState::thread_nodes) whose `force` this term's adds to.
   int grasp = -1;
   int grasp_node = -1;
+  /// A kept contact (ThreadScratch::touched): a body sphere the segment touched in the last step
+  /// and no longer touches at this step's start, within kThreadContactMargin of it: `force` is
+  /// k d0 n with its gap d0 ≤ 0, `axis` its unit normal n; it acts on a Newton iterate only where
+  /// that pushes (n · f(v) > 0: the point would be inside the sphere at the step's end), from
+  /// that iterate on (`engaged`), and gives nothing if it never does (thread_step.cpp).
+  bool kept = false;
+  /// A kept contact that has acted on an iterate of this step: it stays in Newton's system for
+  /// the rest of the step (activated, never dropped within the step: the active set cannot cycle
+  /// between iterates).
+  bool engaged = false;
 };
 
 /// A thread node's deepest contact with the nets' surfaces this step (thread_tissue_contact.cpp).
@@ -107,6 +120,9 @@ struct ThreadScratch {
   /// Contacts with bodies: the box of each run of kThreadSegmentRun segments' nodes at the
   /// step's start (m; thread_contacts.cpp).
   std::vector<Vec3> run_min, run_max;
+  /// Per segment, the body spheres (Model::body_spheres, −1: none) it touched in the last step
+  /// and in this one (kThreadTouchedSpheres each; more are not kept).
+  std::vector<std::array<int, kThreadTouchedSpheres>> touched_before, touched;
   std::vector<ThreadSelfPair> self_pairs;  ///< Capacity fixed at make_data().
   int num_self_pairs = 0;
   int sweep_axis = 0;
@@ -128,6 +144,11 @@ struct ThreadScratch {
   /// Resizes for `thread` in a model of `model_nodes` net nodes and `graspers` graspers (their
   /// held nodes' springs: 2 kMaxGraspThreadNodes terms each) (load time).
   void resize(const ThreadModel& thread, int model_nodes, int graspers);
+  /// Forgets the spheres the segments touched (a reset: no contact is kept into the first step).
+  void forget_touches() noexcept {
+    for (auto& t : touched_before) t.fill(-1);
+    for (auto& t : touched) t.fill(-1);
+  }
 };
 
 }  // namespace numen::core

@@ -97,6 +97,8 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
     scratch.run_min[static_cast<std::size_t>(r)] = rlo;
     scratch.run_max[static_cast<std::size_t>(r)] = rhi;
   }
+  std::swap(scratch.touched_before, scratch.touched);
+  for (auto& t : scratch.touched) t.fill(-1);
   Vec3 lo = scratch.run_min[0], hi = scratch.run_max[0];
   for (int r = 1; r < runs; ++r) {
     lo = lo.cwiseMin(scratch.run_min[static_cast<std::size_t>(r)]);
@@ -116,9 +118,10 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
       const Sphere& sp = model.body_spheres[static_cast<std::size_t>(k)];
       const Vec3 c = bs.position + rot * sp.center;
       const double reach = sp.radius + rt;
+      const double candidate_reach = reach + kThreadContactMargin;
       // The thread, a run, then a segment, whose bounds miss the sphere's is out of its reach
       // (the test below would leave it): the bounds first, cheaper. The segments in their order.
-      const Vec3 r3 = Vec3::Constant(reach);
+      const Vec3 r3 = Vec3::Constant(candidate_reach);
       const Vec3 sphere_lo = c - r3, sphere_hi = c + r3;
       if (!collision_detail::boxes_overlap(lo, hi, sphere_lo, sphere_hi)) continue;
       for (int s = std::max(first, 0); s < last; ++s) {
@@ -138,7 +141,12 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
         const SegmentPoint p = segment_point(st, s, u);
         const Vec3 d = p.x - c;
         const double dist2 = d.squaredNorm();
-        if (dist2 >= reach * reach) continue;
+        if (dist2 >= candidate_reach * candidate_reach) continue;
+        const bool touching = dist2 < reach * reach;
+        auto& before = scratch.touched_before[static_cast<std::size_t>(s)];
+        if (!touching && std::find(before.begin(), before.end(), k) == before.end()) continue;
+        auto& now = scratch.touched[static_cast<std::size_t>(s)];
+        if (auto slot = std::find(now.begin(), now.end(), -1); slot != now.end()) *slot = k;
         const double dist = std::sqrt(dist2);
         const Vec3 n = dist2 > kDegenerateDistance2 ? Vec3(d / dist) : Vec3::UnitZ();
         const Vec3 r = c + sp.radius * n - bs.position;  // lever arm of the contact point
@@ -150,11 +158,21 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
         ThreadPointTerm* term = next_thread_term(scratch, st);
         if (term == nullptr) return;
         set_segment_blocks(*term, s, u);
-        fill_contact(*term, mp, k, reach - dist, n, p.v - vb);
         term->target_velocity = vb;
         term->body = bm.anchored ? -1 : b;
         term->point = c + sp.radius * n;
-        ++st.output.body_contacts;
+        if (touching) {
+          fill_contact(*term, mp, k, reach - dist, n, p.v - vb);
+          ++st.output.body_contacts;
+        } else {
+          // Touched in the last step, not at this one's start: the spring alone, from its gap
+          // (no damping, no friction: they act on a contact, which this is only if the step
+          // closes the gap).
+          term->kept = true;
+          term->axis = n;
+          term->stiffness = k * (n * n.transpose());
+          term->force = (k * (reach - dist)) * n;
+        }
       }
     }
   }

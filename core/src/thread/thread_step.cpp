@@ -112,12 +112,32 @@ Vec3 point_term_force(const ThreadPointTerm& t, const Vec3& v, const Vec3& v0, d
   return t.force - h * t.stiffness * (v - t.target_velocity) - t.damping * (v - v0);
 }
 
+/// Whether a term acts on the iterate `v`: a kept contact once its force has pushed along its
+/// normal on an iterate of this step (the point at the step's end inside the sphere; `engaged`
+/// from then on), every other term always.
+bool term_acts(const ThreadState& st, const std::vector<Vec3>& v, ThreadPointTerm& t, double h) noexcept {
+  if (!t.kept || t.engaged) return true;
+  const auto ia = static_cast<std::size_t>(t.a - 1), ib = static_cast<std::size_t>(t.b - 1);
+  const Vec3 vp = t.wa * v[ia] + t.wb * v[ib];
+  const Vec3 vp0 = t.wa * st.velocity[ia] + t.wb * st.velocity[ib];
+  t.engaged = t.axis.dot(point_term_force(t, vp, vp0, h)) > 0.0;
+  return t.engaged;
+}
+
+/// A term's force at its point's velocity `vp`: point_term_force(), but a kept contact's never
+/// pulls (zero where its force along its normal would be negative: the point away from the
+/// sphere at the step's end).
+Vec3 term_force(const ThreadPointTerm& t, const Vec3& vp, const Vec3& vp0, double h) noexcept {
+  const Vec3 f = point_term_force(t, vp, vp0, h);
+  return t.kept && t.axis.dot(f) < 0.0 ? Vec3::Zero() : f;
+}
+
 void add_point_term(const ThreadState& st, const std::vector<Vec3>& v, const ThreadPointTerm& t,
                     double h, ThreadBand& band) noexcept {
   const auto ia = static_cast<std::size_t>(t.a - 1), ib = static_cast<std::size_t>(t.b - 1);
   const Vec3 vp = t.wa * v[ia] + t.wb * v[ib];
   const Vec3 vp0 = t.wa * st.velocity[ia] + t.wb * st.velocity[ib];
-  const Vec3 f = h * point_term_force(t, vp, vp0, h);
+  const Vec3 f = h * term_force(t, vp, vp0, h);
   const Mat3 m = h * t.damping + (h * h * t.matrix_scale) * t.stiffness;
   band.rhs[ia + 1] += t.wa * f;
   band.rhs[ib + 1] += t.wb * f;
@@ -224,7 +244,10 @@ void hand_point_term_forces(Data& data, ThreadState& st, ThreadScratch& sc,
     const auto ia = static_cast<std::size_t>(term.a - 1), ib = static_cast<std::size_t>(term.b - 1);
     const Vec3 vp = term.wa * v[ia] + term.wb * v[ib];
     const Vec3 vp0 = term.wa * st.velocity[ia] + term.wb * st.velocity[ib];
-    const Vec3 f = point_term_force(term, vp, vp0, h);
+    if (term.kept && !term.engaged) continue;  // never pushed on an iterate: no contact
+    const Vec3 f = term_force(term, vp, vp0, h);
+    if (term.kept && f.isZero(0.0)) continue;  // it pushed on an iterate, not at the step's end
+    if (term.kept) ++st.output.kept_contacts;
     if (term.eyelet >= 0) {
       const auto k = static_cast<std::size_t>(term.eyelet);
       st.output.eyelets[k].friction_force = term.axis.dot(term.force - term.damping * (vp - vp0));
@@ -315,7 +338,8 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
       if (th.tie_end.clamped && nodes > 2) add_tie_spring(x[n - 2], at1, p1, nodes - 2, off1, k_tie, h, band);
     }
     for (int t = 0; t < sc.num_terms; ++t)
-      add_point_term(st, v, sc.terms[static_cast<std::size_t>(t)], h, band);
+      if (term_acts(st, v, sc.terms[static_cast<std::size_t>(t)], h))
+        add_point_term(st, v, sc.terms[static_cast<std::size_t>(t)], h, band);
     const int touching = iteration >= 1 && th.self_contact ? add_thread_self_contacts(model, th, x, v, sc, h, band) : 0;
     st.output.self_contacts = touching;
   };

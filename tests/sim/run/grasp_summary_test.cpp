@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "build_features.hpp"
+#include "csv_lines.hpp"
 #include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
 #include "numen/sim/run/grasp_summary.hpp"
@@ -78,12 +80,15 @@ TEST(GraspSummary, TheDefaultRecordingGraspsTheOrgansTissueAndTheSummaryListsIt)
   std::ifstream in(opt.trace_path);
   std::string line;
   ASSERT_TRUE(std::getline(in, line));
-  const std::size_t commas = static_cast<std::size_t>(std::count(line.begin(), line.end(), ','));
-  ASSERT_EQ(line.substr(line.rfind(',') + 1), "grasps_held");
+  const std::vector<std::string> header = numen::test::split_csv(line);
+  const auto held_column = std::find(header.begin(), header.end(), "grasps_held");
+  ASSERT_NE(held_column, header.end());
+  const auto held_at = static_cast<std::size_t>(held_column - header.begin());
   int changes_up = 0, changes_down = 0, last = 0;
   while (std::getline(in, line)) {
-    ASSERT_EQ(static_cast<std::size_t>(std::count(line.begin(), line.end(), ',')), commas);
-    const int held = std::stoi(line.substr(line.rfind(',') + 1));
+    const std::vector<std::string> row = numen::test::split_csv(line);
+    ASSERT_EQ(row.size(), header.size());
+    const int held = std::stoi(row[held_at]);
     changes_up += held > last ? 1 : 0;
     changes_down += held < last ? 1 : 0;
     last = held;

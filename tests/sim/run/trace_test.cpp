@@ -81,7 +81,8 @@ TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
   ASSERT_EQ(lines.size(), 5u);
   const std::vector<std::string> header = split_csv(lines[0]);
   EXPECT_EQ(header.front(), "time_s");
-  EXPECT_EQ(header.back(), "grasps_held");
+  EXPECT_EQ(header.back(), "needle_event");
+  EXPECT_EQ(column(header, "grasps_held") + 1, column(header, "thread_tension_n"));
   EXPECT_EQ(column(header, "baumgarte_rhs_max") + 1, column(header, "solver_residual"));
   EXPECT_EQ(column(header, "solver_iterations") + 1, column(header, "joint_drift_mm"));
   // One column per axis torque, as many as the records have.
