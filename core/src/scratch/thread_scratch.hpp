@@ -48,16 +48,15 @@ struct ThreadPointTerm {
   /// held node (GraspState::thread_nodes) whose `force` this term's adds to.
   int grasp = -1;
   int grasp_node = -1;
-  /// A kept contact (ThreadScratch::touched): a body sphere the segment touched in the last step
-  /// and no longer touches at this step's start, within kThreadContactMargin of it: `force` is
-  /// k d0 n with its gap d0 ≤ 0, `axis` its unit normal n; it acts on a Newton iterate only where
-  /// that pushes (n · f(v) > 0: the point would be inside the sphere at the step's end), from
-  /// that iterate on (`engaged`), and gives nothing if it never does (thread_step.cpp).
+  /// A kept contact (ThreadScratch::touched): a body sphere the segment has touched and not left
+  /// by more than kThreadContactMargin since, not touching at this step's start: `force` is
+  /// k d0 n with its gap d0 ≤ 0, `axis` its unit normal n. It enters Newton's system on the first
+  /// iterate where it pushes (n · f(v) > 0: the point would end the step inside the sphere) and
+  /// stays in it for the rest of the step (`engaged`: the matrix does not cycle between
+  /// iterates), and it never pulls: its force is zero on an iterate where n · f(v) < 0
+  /// (thread_step.cpp, term_acts(), term_force()).
   bool kept = false;
-  /// A kept contact that has acted on an iterate of this step: it stays in Newton's system for
-  /// the rest of the step (activated, never dropped within the step: the active set cannot cycle
-  /// between iterates).
-  bool engaged = false;
+  bool engaged = false;  ///< A kept contact that has pushed on an iterate of this step.
 };
 
 /// A thread node's deepest contact with the nets' surfaces this step (thread_tissue_contact.cpp).
@@ -120,8 +119,8 @@ struct ThreadScratch {
   /// Contacts with bodies: the box of each run of kThreadSegmentRun segments' nodes at the
   /// step's start (m; thread_contacts.cpp).
   std::vector<Vec3> run_min, run_max;
-  /// Per segment, the body spheres (Model::body_spheres, −1: none) it touched in the last step
-  /// and in this one (kThreadTouchedSpheres each; more are not kept).
+  /// Per segment, the body spheres (Model::body_spheres, −1: none) it touched, or kept, in the
+  /// last step and in this one (kThreadTouchedSpheres each; more are not remembered).
   std::vector<std::array<int, kThreadTouchedSpheres>> touched_before, touched;
   std::vector<ThreadSelfPair> self_pairs;  ///< Capacity fixed at make_data().
   int num_self_pairs = 0;

@@ -34,7 +34,7 @@ void fill_contact(ThreadPointTerm& term, const MaterialPair& mp, double stiffnes
                   const Vec3& n, const Vec3& v_rel) noexcept;
 
 /// How far from a body sphere (m, beyond the thread's and the sphere's radii) a segment that
-/// touched it in the last step keeps it as a contact (ThreadPointTerm::kept). A light thread
+/// has touched it keeps it as a contact (ThreadPointTerm::kept; remembered while within this). A light thread
 /// under tension that loses its contact with a receding jaw straightens back at metres per
 /// second (the suturing scene at 25.010 s: 1.1–2.1 m/s, its nodes carried 1.2 mm into the jaw in
 /// one 1 ms step, and 12 N of tension the step after from 15 contacts at once); kept, the

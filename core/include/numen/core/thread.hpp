@@ -154,9 +154,9 @@ struct ThreadOutput {
   double max_tension = 0.0;  ///< Largest segment tension E A (l − l0)/l0, ≥ 0 (N).
   double max_stretch = 0.0;  ///< Largest segment strain (l − l0)/l0.
   int body_contacts = 0;     ///< Segment–body-sphere contacts this step.
-  /// Kept segment–body-sphere contacts that acted at the step's end: a sphere the segment
-  /// touched in the last step, no longer touching at this step's start, that the step would have
-  /// carried it into (thread_contacts.cpp, gather_thread_body_contacts()).
+  /// Kept segment–body-sphere contacts pushing at the step's end: a sphere the segment has
+  /// touched and not left by more than 2 mm since, not touching at this step's start, that the
+  /// step would have carried it into (docs/thread.md, "Contacts with bodies").
   int kept_contacts = 0;
   int obstacle_contacts = 0; ///< Node–obstacle contacts this step.
   int self_contacts = 0;     ///< Segment–segment contacts this step.
