@@ -10,7 +10,8 @@
 #
 # File-local names (anonymous namespaces, static functions) of the files of one batch share a
 # translation unit: two of one name are a redefinition error. Give one a distinct name, or
-# move a shared helper to a header. NUMEN_UNITY_BATCH=1 turns unity builds off (a change to
+# move a shared helper to a header. Every configure checks this for every pair of files of a
+# target, whatever batches this build makes (numen_check_unity_names() below). NUMEN_UNITY_BATCH=1 turns unity builds off (a change to
 # one file then recompiles that file alone: the setting for editing one file often).
 set(NUMEN_UNITY_BATCH 8 CACHE STRING "Source files per unity translation unit (1: no unity build)")
 if(NOT NUMEN_UNITY_BATCH MATCHES "^[1-9][0-9]*$")
@@ -43,11 +44,20 @@ function(numen_unity target)
   if(arg_BATCH)
     set(batch ${arg_BATCH})
   endif()
+  get_target_property(_dir ${target} SOURCE_DIR)
+  get_target_property(_sources ${target} SOURCES)
+  # Every unity-built target's files, for numen_check_unity_names() (also when this build is not
+  # a unity one: the names are checked for the builds that are).
+  foreach(_s IN LISTS _sources)
+    get_filename_component(_a "${_s}" ABSOLUTE BASE_DIR "${_dir}")
+    get_source_file_property(_skip "${_a}" TARGET_DIRECTORY ${target} SKIP_UNITY_BUILD_INCLUSION)
+    if(_a MATCHES "\\.(cpp|cc|cxx)$" AND NOT _skip)
+      set_property(GLOBAL APPEND PROPERTY NUMEN_UNITY_FILES "${target}\t${_a}")
+    endif()
+  endforeach()
   if(NOT (NUMEN_UNITY_BATCH GREATER 1 AND batch GREATER 1))
     return()
   endif()
-  get_target_property(_dir ${target} SOURCE_DIR)
-  get_target_property(_sources ${target} SOURCES)
   set(_optional)
   foreach(_s IN LISTS arg_OPTIONAL)
     get_filename_component(_a "${_s}" ABSOLUTE BASE_DIR "${_dir}")
@@ -109,4 +119,32 @@ function(numen_unity target)
     endforeach()
   endforeach()
   set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
+endfunction()
+
+# numen_check_unity_names(): fails the configure when two files of one unity-built target each
+# define a file-local name (an anonymous namespace's or a file-level static's) that some build's
+# batching would put in one translation unit as a redefinition (cmake/unity_names.py). Which files
+# share a batch depends on the NUMEN_WITH_* options, so a clash the default build never compiles
+# together breaks another combination's build; this finds it in every configure, whatever the
+# options (~2 s). Called once, after every target is defined. Skipped, saying so, without Python.
+function(numen_check_unity_names)
+  get_property(_lines GLOBAL PROPERTY NUMEN_UNITY_FILES)
+  if(NOT _lines)
+    return()
+  endif()
+  find_package(Python3 COMPONENTS Interpreter QUIET)
+  if(NOT Python3_Interpreter_FOUND)
+    message(STATUS "unity names: not checked (no Python 3 interpreter)")
+    return()
+  endif()
+  list(JOIN _lines "\n" _text)
+  set(_list "${CMAKE_BINARY_DIR}/unity_files.txt")
+  file(WRITE "${_list}" "${_text}\n")
+  execute_process(COMMAND ${Python3_EXECUTABLE} "${PROJECT_SOURCE_DIR}/cmake/unity_names.py" "${_list}"
+                  RESULT_VARIABLE _rc OUTPUT_VARIABLE _out ERROR_VARIABLE _err)
+  if(NOT _rc EQUAL 0)
+    message(FATAL_ERROR "unity names: ${_out}${_err}")
+  endif()
+  string(STRIP "${_out}" _out)
+  message(STATUS "${_out}")
 endfunction()

@@ -20,12 +20,12 @@ namespace {
 
 using numen::test::rot;
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 }  // namespace
 
 TEST(Feedback, PullsTheDeviceTowardsTheGodObjectWithItsOwnGains) {
-  const core::FeedbackGains g{150.0, 3.0, 2.0, 0.05, kInf, kInf};
+  const core::FeedbackGains g{150.0, 3.0, 2.0, 0.05, kInfinity, kInfinity};
   core::BodyState s;
   s.position = Vec3(0.0, 0.0, 0.01);  // held above the target (e.g. by a floor)
   const core::Pose target{Vec3(0.0, 0.0, -0.02), rot(0.2, Vec3::UnitZ())};
@@ -42,7 +42,7 @@ TEST(Feedback, PullsTheDeviceTowardsTheGodObjectWithItsOwnGains) {
   const core::Wrench w2 = core::feedback_wrench(g, target, tt, s);
   EXPECT_TRUE((w2.torque - w.torque).isApprox(Vec3(0.05, 0.0, 0.0), 1e-12));
   // Gains scale linearly; zero gains (non-haptic device) give zero.
-  const core::FeedbackGains g2{300.0, 6.0, 4.0, 0.1, kInf, kInf};
+  const core::FeedbackGains g2{300.0, 6.0, 4.0, 0.1, kInfinity, kInfinity};
   const core::Wrench w3 = core::feedback_wrench(g2, target, tt, s);
   EXPECT_TRUE(w3.force.isApprox(2.0 * w2.force, 1e-12));
   EXPECT_TRUE(w3.torque.isApprox(2.0 * w2.torque, 1e-12));
@@ -57,7 +57,7 @@ TEST(Feedback, SaturationClampsTheNormAndKeepsTheDirection) {
   EXPECT_NEAR(s.torque.norm(), 0.5, 1e-14);
   EXPECT_GT(s.force.normalized().dot(w.force.normalized()), 1.0 - 1e-15);
   EXPECT_GT(s.torque.normalized().dot(w.torque.normalized()), 1.0 - 1e-15);
-  const core::Wrench u = core::saturate_wrench(w, 10.0, kInf);  // under the limit: unchanged
+  const core::Wrench u = core::saturate_wrench(w, 10.0, kInfinity);  // under the limit: unchanged
   EXPECT_EQ(u.force, w.force);
   EXPECT_EQ(u.torque, w.torque);
   const core::Wrench z = core::saturate_wrench(w, 0.0, 0.0);

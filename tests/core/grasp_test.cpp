@@ -23,7 +23,7 @@ namespace {
 
 namespace core = numen::core;
 
-constexpr double kGraspDeg = numen::test::kGraspDeg;
+using numen::test::kGraspDeg;
 
 /// A grasper pointing down (numen::test::add_grasper(): bodies 0–2, its hinge at z = 0.02 m)
 /// and a thin upright plate between its jaws:

@@ -22,7 +22,7 @@ namespace {
 
 namespace core = numen::core;
 
-constexpr double kDeg = numen::test::kGraspDeg;
+using numen::test::kGraspDeg;
 
 /// The height below a grasper's hinge of its jaws' third spheres (8 mm from the hinge) at 25°.
 constexpr double kWireBelowHinge = 0.008 * 0.9762960071199334;  // 8 mm · cos 12.5°
@@ -53,7 +53,7 @@ core::Model needle_rig(double gravity, const core::Vec3& a_at, double a_opening,
   m.material_pairs = {core::MaterialPair{2e4, 10.0, 0.5}};
   numen::test::add_grasper(m, a_at, a_opening, 5.0, jaw_spheres);
   if (second) {
-    numen::test::add_grasper(m, b_at, 60 * kDeg, 5.0, jaw_spheres);
+    numen::test::add_grasper(m, b_at, 60 * kGraspDeg, 5.0, jaw_spheres);
     m.grasps[1].name = "grasper_b";
   }
   m.initial_held_body = 0;
@@ -79,7 +79,8 @@ namespace {
 /// under its arc (60° either side of its middle and 30° towards the tip: clear of the jaws, its
 /// centre of mass within them). Finalized.
 core::Model needle_on_balls(const core::Vec3& at, int jaw_spheres) {
-  core::Model m = needle_rig(9.81, at, 60 * kDeg, core::Vec3::Zero(), false, core::Vec3::Zero(), jaw_spheres);
+  core::Model m = needle_rig(9.81, at, 60 * kGraspDeg, core::Vec3::Zero(), false,
+                             core::Vec3::Zero(), jaw_spheres);
   const core::NeedleModel n = m.needles[0];
   const core::Pose np = m.bodies[static_cast<std::size_t>(n.body)].initial_pose;
   for (double phi_deg : {-60.0, 60.0, 30.0}) {
@@ -87,7 +88,7 @@ core::Model needle_on_balls(const core::Vec3& at, int jaw_spheres) {
     ball.name = "ball";
     ball.type = core::ShapeType::kSphere;
     ball.radius = 0.001;
-    const double s_arc = 0.5 * n.length() + n.radius * phi_deg * kDeg;
+    const double s_arc = 0.5 * n.length() + n.radius * phi_deg * kGraspDeg;
     ball.pose.position = np.position + np.orientation * core::needle_point(n, s_arc) -
                          core::Vec3(0, 0, n.wire_radius + ball.radius);
     m.obstacles.push_back(ball);
@@ -102,13 +103,13 @@ double closing_grasp_opening(int jaw_spheres) {
   const core::Vec3 at(0, 0, 0.06);
   const core::Model m = needle_on_balls(at, jaw_spheres);
   core::Data d = core::make_data(m);
-  double theta = 60 * kDeg;
+  double theta = 60 * kGraspDeg;
   for (int s = 0; s < 600; ++s) {
-    const double r = theta > 25 * kDeg ? -100 * kDeg : 0.0;
+    const double r = theta > 25 * kGraspDeg ? -100 * kGraspDeg : 0.0;
     numen::test::set_grasper_opening(d, theta, r);
     numen::test::set_grasper_target(d, at, core::Vec3::Zero());
     core::step(m, d);
-    theta = std::max(25 * kDeg, theta + r * m.dt);
+    theta = std::max(25 * kGraspDeg, theta + r * m.dt);
     if (d.grasps[0].event == core::GraspEvent::kGrasp) return d.grasps[0].opening;
   }
   return -1.0;
@@ -125,10 +126,11 @@ TEST(NeedleGrasp, SparseJawSpheresMissTheThinWire) {
   // mm) close on it as a flat jaw would, below the grasper's 30°.
   EXPECT_LT(closing_grasp_opening(4), 0.0) << "the sparse jaws grasped the thin wire";
   const double dense = closing_grasp_opening(10);
-  EXPECT_GT(dense, 25 * kDeg) << "the dense jaws never grasped the wire";
-  EXPECT_LT(dense, 30 * kDeg);
-  std::printf("jaws closing on the needle's wire: 4 spheres: no grasp; 10 spheres: grasp at %.2f deg\n",
-              dense / kDeg);
+  EXPECT_GT(dense, 25 * kGraspDeg) << "the dense jaws never grasped the wire";
+  EXPECT_LT(dense, 30 * kGraspDeg);
+  std::printf(
+      "jaws closing on the needle's wire: 4 spheres: no grasp; 10 spheres: grasp at %.2f deg\n",
+      dense / kGraspDeg);
 }
 
 TEST(NeedleGrasp, TheJawsCloseOnTheWireLetItGoAndTakeItAgain) {
@@ -143,8 +145,8 @@ TEST(NeedleGrasp, TheJawsCloseOnTheWireLetItGoAndTakeItAgain) {
   core::Data d = core::make_data(m);
   const int nb = n.body;
   const double z0 = np.position.z();
-  double theta = 60 * kDeg;
-  const double rate = 100 * kDeg;
+  double theta = 60 * kGraspDeg;
+  const double rate = 100 * kGraspDeg;
   std::vector<double> grasp_openings;
   grasp_openings.reserve(8);
   int release_step = -1, grasp_step_first = -1;
@@ -159,7 +161,7 @@ TEST(NeedleGrasp, TheJawsCloseOnTheWireLetItGoAndTakeItAgain) {
   numen::test::AllocationGuard guard;
   for (int s = 0; s < 4000; ++s) {
     const double t = s * m.dt;
-    const double target_theta = (s >= 1600 && s < 2700) ? 60 * kDeg : 25 * kDeg;
+    const double target_theta = (s >= 1600 && s < 2700) ? 60 * kGraspDeg : 25 * kGraspDeg;
     core::Vec3 hand = at, v = core::Vec3::Zero();
     double dv = 0.0;
     if (s >= 600 && s < 1100) hand.z() += bump(t - 0.6, 0.5, 0.01, &dv), v.z() = dv;
@@ -190,8 +192,9 @@ TEST(NeedleGrasp, TheJawsCloseOnTheWireLetItGoAndTakeItAgain) {
   EXPECT_EQ(guard.count(), 0u) << "the steps allocated";
   ASSERT_EQ(grasp_openings.size(), 2u) << "grasped, let go, grasped again";
   for (double o : grasp_openings) {
-    EXPECT_GT(o, 25.0 * kDeg) << "grasped at " << o / kDeg << "°, where both jaws touch the wire";
-    EXPECT_LT(o, 30.0 * kDeg) << "grasped at " << o / kDeg << "°";
+    EXPECT_GT(o, 25.0 * kGraspDeg)
+        << "grasped at " << o / kGraspDeg << "°, where both jaws touch the wire";
+    EXPECT_LT(o, 30.0 * kGraspDeg) << "grasped at " << o / kGraspDeg << "°";
   }
   EXPECT_LT(grasp_step_first, 600) << "grasped while the jaws closed, before the lift";
   EXPECT_GT(release_step, 1600);
@@ -211,18 +214,18 @@ TEST(NeedleGrasp, HoldsTheNeedleAgainstGravityAtRecordedSpeedsAndDropsItWhenOpen
   // JIGSAWS recordings' tool-tip motion) for 2 s, holds still 0.5 s, then opens at 100°/s: the
   // needle falls free.
   const core::Vec3 start(0, 0, 0.06);
-  const core::Model m = needle_rig(9.81, start, 25 * kDeg, core::Vec3::Zero());
+  const core::Model m = needle_rig(9.81, start, 25 * kGraspDeg, core::Vec3::Zero());
   core::Data d = core::make_data(m);
   const int nb = needle_body(m);
   numen::test::set_grasper_target(d, start, core::Vec3::Zero());
-  numen::test::set_grasper_opening(d, 25 * kDeg, 0.0);
+  numen::test::set_grasper_opening(d, 25 * kGraspDeg, 0.0);
   core::step(m, d);
   ASSERT_EQ(d.grasps[0].body, nb) << "grasped in the first step";
   const core::Vec3 grasped = needle_in_jaw(m, d);
   double worst = 0.0, fastest = 0.0;
   int dropped = -1, released = -1;
   const int lift = 500, sway = 2000, still = 500, open = 300;
-  double theta = 25 * kDeg;
+  double theta = 25 * kGraspDeg;
   numen::test::AllocationGuard guard;
   double z_release = 0.0;
   for (int s = 1; s < lift + sway + still + open; ++s) {
@@ -241,9 +244,9 @@ TEST(NeedleGrasp, HoldsTheNeedleAgainstGravityAtRecordedSpeedsAndDropsItWhenOpen
         v.x() = 0.03 * (de * std::sin(10 * ts) + e * 10 * std::cos(10 * ts));
       }
     }
-    const double r = s >= lift + sway + still && theta < 60 * kDeg ? 100 * kDeg : 0.0;
+    const double r = s >= lift + sway + still && theta < 60 * kGraspDeg ? 100 * kGraspDeg : 0.0;
     numen::test::set_grasper_opening(d, theta, r);
-    theta = std::min(60 * kDeg, theta + r * m.dt);
+    theta = std::min(60 * kGraspDeg, theta + r * m.dt);
     numen::test::set_grasper_target(d, at, v);
     core::step(m, d);
     ASSERT_EQ(d.status & core::kNonFinite, 0u) << s;
@@ -277,11 +280,11 @@ TEST(NeedleGrasp, OneInstrumentHandsTheNeedleToTheOther) {
   const double R = core::NeedleSpec{}.radius;
   const double y4 = R - std::sqrt(R * R - 0.004 * 0.004);  // the wire's y 4 mm from the middle
   const core::Vec3 a_at(-0.004, y4, 0.06), b_start(0.004, y4, 0.08);
-  const core::Model m = needle_rig(9.81, a_at, 25 * kDeg, core::Vec3(0, 0, 0), true, b_start);
+  const core::Model m = needle_rig(9.81, a_at, 25 * kGraspDeg, core::Vec3(0, 0, 0), true, b_start);
   core::Data d = core::make_data(m);
   const int nb = needle_body(m);
-  const double rate = 100 * kDeg;
-  double theta_a = 25 * kDeg, theta_b = 60 * kDeg, lowest = 1.0;
+  const double rate = 100 * kGraspDeg;
+  double theta_a = 25 * kGraspDeg, theta_b = 60 * kGraspDeg, lowest = 1.0;
   const double z0 = m.bodies[static_cast<std::size_t>(nb)].initial_pose.position.z();
   int both = 0, b_grasp = -1, a_release = -1;
   numen::test::AllocationGuard guard;
@@ -298,12 +301,12 @@ TEST(NeedleGrasp, OneInstrumentHandsTheNeedleToTheOther) {
       a_now.z() += 0.03 * 0.5 * (1 - std::cos(M_PI * t / 0.5));
       a_v.z() = t < 0.5 ? 0.03 * 0.5 * M_PI / 0.5 * std::sin(M_PI * t / 0.5) : 0.0;
     }
-    const double rb = (s >= 500 && theta_b > 25 * kDeg) ? -rate : 0.0;
-    const double ra = (s >= 850 && theta_a < 60 * kDeg) ? rate : 0.0;
+    const double rb = (s >= 500 && theta_b > 25 * kGraspDeg) ? -rate : 0.0;
+    const double ra = (s >= 850 && theta_a < 60 * kGraspDeg) ? rate : 0.0;
     numen::test::set_grasper_opening(d, theta_a, ra, 0);
     numen::test::set_grasper_opening(d, theta_b, rb, 2);
-    theta_a = std::min(60 * kDeg, theta_a + ra * m.dt);
-    theta_b = std::max(25 * kDeg, theta_b + rb * m.dt);
+    theta_a = std::min(60 * kGraspDeg, theta_a + ra * m.dt);
+    theta_b = std::max(25 * kGraspDeg, theta_b + rb * m.dt);
     numen::test::set_grasper_target(d, a_now, a_v);
     core::BodyTarget& bt = d.body_targets[3];
     bt.pose = core::Pose{b_at, numen::test::rot(M_PI, core::Vec3::UnitX())};
@@ -337,7 +340,7 @@ TEST(NeedleGrasp, TheHandFeelsWhatTheHeldNeedlePressesOn) {
   // the tube's coupling) is the sphere's push on the needle: the god-object's contact felt through
   // what it holds (the paper's tool switching). Before the touch, nothing.
   const core::Vec3 start(0, 0, 0.06);
-  core::Model m = needle_rig(0.0, start, 25 * kDeg, core::Vec3::Zero());
+  core::Model m = needle_rig(0.0, start, 25 * kGraspDeg, core::Vec3::Zero());
   m.feedback = core::FeedbackGains{1000.0, core::damping_from_ratio(0.85, 0.07, 1000.0), 1.0,
                                    core::damping_from_ratio(0.85, 2e-5, 1.0)};
   const core::NeedleModel n = m.needles[0];
@@ -360,7 +363,7 @@ TEST(NeedleGrasp, TheHandFeelsWhatTheHeldNeedlePressesOn) {
     const double t = std::clamp((s - 200) * m.dt, 0.0, 0.2);  // still 0.2 s, then down
     at.z() -= 0.001 * 0.5 * (1 - std::cos(M_PI * t / 0.2));
     v.z() = t > 0.0 && t < 0.2 ? -0.001 * 0.5 * M_PI / 0.2 * std::sin(M_PI * t / 0.2) : 0.0;
-    numen::test::set_grasper_opening(d, 25 * kDeg, 0.0);
+    numen::test::set_grasper_opening(d, 25 * kGraspDeg, 0.0);
     numen::test::set_grasper_target(d, at, v);
     core::step(m, d);
     ASSERT_EQ(d.status & core::kNonFinite, 0u) << s;

@@ -56,17 +56,17 @@ namespace {
 using numen::test::at;
 using numen::test::rot;
 
-enum class Variant { kFree, kJointed, kImposed, kThreeNets };
+enum class NetVariant { kFree, kJointed, kImposed, kThreeNets };
 
 /// Body 0: the rigid component of an icosphere net (no spheres), spinning;
 /// body 1: a free probe the net touches; with kJointed, body 2: a handle
 /// (the device's body) carrying body 0 on a revolute joint.
-core::Model scene(Variant v) {
+core::Model scene(NetVariant v) {
   core::Model m;
   m.dt = 2e-3;
   m.gravity = Vec3(0.0, 0.0, -9.81);
   m.coupling_mode =
-      v == Variant::kImposed ? core::CouplingMode::kDirect : core::CouplingMode::kGodObject;
+      v == NetVariant::kImposed ? core::CouplingMode::kDirect : core::CouplingMode::kGodObject;
   m.solver.tolerance = 1e-12;
   m.solver.max_iterations = 500;
   m.material_names = {"hard", "net"};
@@ -94,7 +94,7 @@ core::Model scene(Variant v) {
   probe.initial_twist.angular = Vec3(0.0, 0.5, -0.3);
   m.bodies = {b, probe};
   m.initial_held_body = 0;
-  if (v == Variant::kJointed) {
+  if (v == NetVariant::kJointed) {
     core::BodyModel handle = b;
     handle.name = "handle";
     handle.mass = 0.3;
@@ -126,7 +126,7 @@ core::Model scene(Variant v) {
   s.tie_stiffness = 150.0;
   s.tie_damping = 0.4;
   EXPECT_EQ(core::add_net(m, core::make_icosphere(0.05, 1), s), "");
-  if (v == Variant::kThreeNets) {
+  if (v == NetVariant::kThreeNets) {
     // A second net on the same rigid component (a tip above the bag) and a
     // third on the probe: several nets' ties on one body's Schur block.
     core::TriangleMesh tip = core::make_icosphere(0.02, 0);
@@ -299,7 +299,7 @@ void check_scratch(const core::Model& m, const core::Data& d, const DenseSystem&
 }  // namespace
 
 TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
-  const core::Model m = scene(Variant::kFree);
+  const core::Model m = scene(NetVariant::kFree);
   core::Data d = core::make_data(m);
   numen::test::perturb_nodes(d, 3e-3, 0.05);
   d.target = core::Pose{Vec3(0.02, 0.0, 0.12), rot(0.5, Vec3(1, 2, 2.5))};
@@ -325,7 +325,7 @@ TEST(NetSolve, FreeRigidComponentMatchesTheDenseSolve) {
 }
 
 TEST(NetSolve, WarmStartedSolveAfterRealStepsMatchesTheDenseSolve) {
-  const core::Model m = scene(Variant::kFree);
+  const core::Model m = scene(NetVariant::kFree);
   core::Data d = core::make_data(m);
   numen::test::perturb_nodes(d, 2e-3, 0.05);
   for (int k = 0; k < 30; ++k) {
@@ -352,7 +352,7 @@ namespace {
 /// one node, two bodies), against the dense KKT solve: [A Gᵀ; G 0] [Δ; y] = [b; c] with G the joint
 /// rows at the step's start (Data::articulation.rows) and c their Baumgarte right-hand side.
 void check_jointed_against_kkt(bool shared_node, const char* label) {
-  const core::Model m = scene(Variant::kJointed);
+  const core::Model m = scene(NetVariant::kJointed);
   core::Data d = core::make_data(m);
   // A few real steps first: joint rows with a previous Δu, warm start, drift.
   for (int k = 0; k < 10; ++k) {
@@ -448,7 +448,7 @@ TEST(NetSolve, JointedSolveWithANodeOnTwoBodiesMatchesTheDenseKktSolve) {
 }
 
 TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
-  const core::Model m = scene(Variant::kImposed);
+  const core::Model m = scene(NetVariant::kImposed);
   core::Data d = core::make_data(m);
   numen::test::perturb_nodes(d, 3e-3, 0.05);
   d.target = core::Pose{Vec3(0.02, -0.01, 0.11), rot(0.5, Vec3(1, 2, 2.5))};
@@ -477,7 +477,7 @@ TEST(NetSolve, ImposedRigidComponentHasNoUnknownAndTheNodesMatchTheDenseSolve) {
 }
 
 TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
-  core::Model m = scene(Variant::kFree);
+  core::Model m = scene(NetVariant::kFree);
   m.solver.max_iterations = 1;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
@@ -496,7 +496,7 @@ TEST(NetSolve, ReportsNonConvergenceAtMaxIterations) {
 }
 
 TEST(NetSolve, SeveralNetsOnOneBodyAndOnTheProbeMatchTheDenseSolve) {
-  const core::Model m = scene(Variant::kThreeNets);
+  const core::Model m = scene(NetVariant::kThreeNets);
   ASSERT_EQ(m.num_nets(), 3);
   core::Data d = core::make_data(m);
   numen::test::perturb_nodes(d, 3e-3, 0.05);
@@ -581,7 +581,7 @@ struct Staged {
 Staged staged_body_contact(double tolerance = 1e-12,
                            int delay = core::SolverSettings{}.error_estimate_delay,
                            int max_iterations = 500, double error_tolerance = 0.0) {
-  Staged st{scene(Variant::kFree), {}, {}, {}, false};
+  Staged st{scene(NetVariant::kFree), {}, {}, {}, false};
   st.m.solver.tolerance = tolerance;
   st.m.solver.error_tolerance = error_tolerance;
   st.m.solver.error_estimate_delay = delay;

@@ -17,7 +17,7 @@ using core::Vec3;
 
 namespace {
 
-Quat random_rotation(int seed) {
+Quat random_body_rotation(int seed) {
   // Deterministic, well-spread unit quaternions.
   const double a = 0.37 * seed + 0.1, b = 1.13 * seed + 0.2, c = 2.71 * seed + 0.3;
   Quat q(std::cos(a), std::sin(a) * std::cos(b), std::sin(a) * std::sin(b) * std::cos(c),
@@ -37,7 +37,7 @@ TEST(RigidBody, WorldInertiaRotatesTheBodyInertia) {
   Mat3 ib;
   ib << 0.02, 0.001, 0.0, 0.001, 0.03, -0.002, 0.0, -0.002, 0.05;
   for (int s = 0; s < 5; ++s) {
-    const Quat q = random_rotation(s);
+    const Quat q = random_body_rotation(s);
     const Mat3 iw = core::world_inertia(q, ib);
     // The angular momentum of a body-frame ω equals R (I_b ω_b).
     const Vec3 wb(0.4, -1.0, 2.0);
@@ -82,7 +82,7 @@ TEST(RigidBody, OrientationIntegrationIsExactForConstantAngularVelocity) {
   const Vec3 axis = Vec3(1.0, 1.0, 0.0).normalized();
   const double rate = 30.0, h = 1e-3;
   const int n = 1000;
-  Quat q = random_rotation(3);
+  Quat q = random_body_rotation(3);
   const Quat q0 = q;
   Quat q_first = q;
   for (int i = 0; i < n; ++i) {
@@ -103,7 +103,7 @@ TEST(RigidBody, OrientationIntegrationIsExactForConstantAngularVelocity) {
 
 TEST(RigidBody, ImplicitGyroscopicStepConsistentWithExplicitForSmallSteps) {
   Mat3 ib = Vec3(0.01, 0.02, 0.03).asDiagonal();
-  const Quat q = random_rotation(7);
+  const Quat q = random_body_rotation(7);
   const Vec3 w(3.0, -1.0, 2.0);
   const Mat3 iw = core::world_inertia(q, ib);
   const Vec3 alpha = iw.inverse() * core::gyroscopic_torque(iw, w);
@@ -121,7 +121,7 @@ TEST(RigidBody, ImplicitGyroscopicStepConsistentWithExplicitForSmallSteps) {
 
 TEST(RigidBody, ImplicitGyroscopicStepLeavesPrincipalSpinsAndSymmetricBodiesAlone) {
   const Mat3 ib = Vec3(0.01, 0.02, 0.03).asDiagonal();
-  const Quat q = random_rotation(2);
+  const Quat q = random_body_rotation(2);
   const Vec3 w = q * Vec3(0.0, 0.0, 50.0);  // about a principal axis
   EXPECT_TRUE((core::implicit_gyroscopic_velocity(q, ib, w, 1e-2) - w).norm() < 1e-12);
   const Mat3 iso = 0.02 * Mat3::Identity();

@@ -1,6 +1,6 @@
 // Tests of core/step with deformable god-objects (paper §4.2; Meseure &
 // Chaillou 2000): the static deflection of a held net against the linear
-// static solution and the zero-length ties' damped-oscillator return (first
+// static solution and the zero-length ties' damped-underdamped_oscillator return (first
 // order in h for the implicit scheme). Fast device motion:
 // step_deformable_fast_motion_test.cpp; a net pressed on obstacles (allocations, determinism,
 // non-finite rollback, solver reports): step_deformable_pressing_test.cpp.
@@ -98,12 +98,12 @@ TEST(StepDeformable, IcosphereSettlesToTheLinearStaticSolution) {
 }
 
 // ---------------------------------------------------------------------------
-// (2) The ties return a uniformly displaced icosahedron as a damped oscillator.
+// (2) The ties return a uniformly displaced icosahedron as a damped underdamped_oscillator.
 
 namespace {
 
 /// x(t) of m ẍ + γ ẋ + k x = 0, x(0) = x0, ẋ(0) = 0, underdamped.
-double oscillator(double m, double k, double gamma, double x0, double t) {
+double underdamped_oscillator(double m, double k, double gamma, double x0, double t) {
   const double wn = std::sqrt(k / m);
   const double zeta = gamma / (2.0 * std::sqrt(m * k));
   const double wd = wn * std::sqrt(1.0 - zeta * zeta);
@@ -134,7 +134,7 @@ double tie_oscillator_error(core::Integrator integ, double dt, double* max_strai
     const Eigen::VectorXd x = node_offsets(m, d);
     for (int i = 0; i < m.num_nodes(); ++i) {
       Vec3 exact;
-      for (int c = 0; c < 3; ++c) exact(c) = oscillator(0.1, 10.0, 0.2, x0(c), t);
+      for (int c = 0; c < 3; ++c) exact(c) = underdamped_oscillator(0.1, 10.0, 0.2, x0(c), t);
       err = std::max(err, (x.segment<3>(3 * i) - exact).norm() / x0.norm());
     }
     *max_strain = std::max(*max_strain, d.nets[0].max_strain);
@@ -152,9 +152,13 @@ TEST(StepDeformable, TiesReturnADisplacedNetAsADampedOscillatorAtFirstOrder) {
   double strain_s = 0.0;
   const double s1 = tie_oscillator_error(core::Integrator::kSymplecticEuler, 1e-3, &strain_s);
   const double s2 = tie_oscillator_error(core::Integrator::kSymplecticEuler, 5e-4, &strain_s);
-  std::printf("[tie oscillator implicit]   max rel err dt=1ms %.3e  0.5ms %.3e  0.25ms %.3e  ratios %.3f %.3f\n",
-              e1, e2, e3, e1 / e2, e2 / e3);
-  std::printf("[tie oscillator symplectic] max rel err dt=1ms %.3e  0.5ms %.3e  ratio %.3f\n", s1, s2, s1 / s2);
+  std::printf(
+      "[tie underdamped_oscillator implicit]   max rel err dt=1ms %.3e  0.5ms %.3e  0.25ms %.3e  "
+      "ratios %.3f %.3f\n",
+      e1, e2, e3, e1 / e2, e2 / e3);
+  std::printf(
+      "[tie underdamped_oscillator symplectic] max rel err dt=1ms %.3e  0.5ms %.3e  ratio %.3f\n",
+      s1, s2, s1 / s2);
   RecordProperty("implicit_err_1ms", std::to_string(e1));
   RecordProperty("implicit_ratio", std::to_string(e1 / e2));
   // Backward Euler: extra damping ≈ ½ h ω² per unit time, i.e. a few % of
@@ -172,7 +176,7 @@ TEST(StepDeformable, TiesReturnADisplacedNetAsADampedOscillatorAtFirstOrder) {
 }
 
 TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTheTrapezoidalRule) {
-  // Same oscillator through the coupled node solve: the half-step system
+  // Same underdamped_oscillator through the coupled node solve: the half-step system
   // (h_s = h/2) and the midpoint node update make it Crank–Nicolson, error ∝ h².
   double strain = 0.0;
   const double e1 = tie_oscillator_error(core::Integrator::kTrapezoidal, 1e-3, &strain);
@@ -181,7 +185,8 @@ TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTheTrapezoidalRule)
   const double implicit =
       tie_oscillator_error(core::Integrator::kLinearlyImplicitEuler, 1e-3, &strain);
   std::printf(
-      "[tie oscillator trapezoidal] max rel err dt=1ms %.3e  0.5ms %.3e  0.25ms %.3e  ratios %.3f "
+      "[tie underdamped_oscillator trapezoidal] max rel err dt=1ms %.3e  0.5ms %.3e  0.25ms %.3e  "
+      "ratios %.3f "
       "%.3f\n",
       e1, e2, e3, e1 / e2, e2 / e3);
   EXPECT_NEAR(e1 / e2, 4.0, 0.4);
@@ -191,8 +196,8 @@ TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTheTrapezoidalRule)
 }
 
 TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTrBdf2) {
-  // Same oscillator through both stages of TR-BDF2's coupled node solve (one system step
-  // h_s = (1 − 1/√2) h for both): error ∝ h² (measured: about half the trapezoidal rule's).
+  // Same underdamped_oscillator through both stages of TR-BDF2's coupled node solve (one system
+  // step h_s = (1 − 1/√2) h for both): error ∝ h² (measured: about half the trapezoidal rule's).
   double strain = 0.0;
   const double e1 = tie_oscillator_error(core::Integrator::kTrBdf2, 1e-3, &strain);
   const double e2 = tie_oscillator_error(core::Integrator::kTrBdf2, 5e-4, &strain);
@@ -200,7 +205,8 @@ TEST(StepDeformable, TiesReturnADisplacedNetAtSecondOrderWithTrBdf2) {
   const double implicit =
       tie_oscillator_error(core::Integrator::kLinearlyImplicitEuler, 1e-3, &strain);
   std::printf(
-      "[tie oscillator tr-bdf2] max rel err dt=1ms %.3e  0.5ms %.3e  0.25ms %.3e  ratios %.3f "
+      "[tie underdamped_oscillator tr-bdf2] max rel err dt=1ms %.3e  0.5ms %.3e  0.25ms %.3e  "
+      "ratios %.3f "
       "%.3f\n",
       e1, e2, e3, e1 / e2, e2 / e3);
   EXPECT_NEAR(e1 / e2, 4.0, 0.4);

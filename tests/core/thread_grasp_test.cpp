@@ -25,12 +25,12 @@ namespace {
 namespace core = numen::core;
 using core::Vec3;
 
-constexpr double kDeg = numen::test::kGraspDeg;
+using numen::test::kGraspDeg;
 /// The grasper's hinge above the plane (m): its jaws' tip spheres (1.5 mm, 11 mm below the
 /// hinge) come down on the plane as the jaws close past 27° and meet the thread on it below ~9°.
 constexpr double kHingeZ = 0.0122;
 /// The jaws' opening once closed on the thread (rad).
-constexpr double kClosed = 4 * kDeg;
+constexpr double kClosed = 4 * kGraspDeg;
 
 /// Bodies 0–2: numen::test::add_grasper() pointing down, its hinge at z = kHingeZ above the
 /// plane z = 0, its jaws open 60° (close below 30°, open above 40°, springs 2000 N/m, 2 N·s/m,
@@ -43,7 +43,7 @@ core::Model thread_grasp_rig(double max_force, bool tied, double drag = 1e-3, do
   m.dt = 1e-3;
   m.material_names = {"steel"};
   m.material_pairs = {core::MaterialPair{2e4, 10.0, 0.5}};
-  numen::test::add_grasper(m, Vec3(0, 0, kHingeZ + 0.04), 60 * kDeg, max_force);
+  numen::test::add_grasper(m, Vec3(0, 0, kHingeZ + 0.04), 60 * kGraspDeg, max_force);
   core::Obstacle floor;
   floor.type = core::ShapeType::kPlane;
   m.obstacles.push_back(floor);
@@ -105,7 +105,7 @@ std::function<Vec3(double, Vec3&)> ramp(const Vec3& by) {
 /// Returns the step index of the grasp (−1: none); `opening`: the jaws' opening then (rad).
 int close_on_thread(const core::Model& m, core::Data& d, double& theta, double* opening = nullptr) {
   int grasped = -1;
-  drive(m, d, 660, theta, -100 * kDeg, still, [&](int s) {
+  drive(m, d, 660, theta, -100 * kGraspDeg, still, [&](int s) {
     if (d.grasps[0].event != core::GraspEvent::kGrasp) return;
     grasped = s;
     if (opening != nullptr) *opening = d.grasps[0].opening;
@@ -126,7 +126,7 @@ Vec3 jaw_mean_point(const core::Model& m, const core::Data& d, const core::Grasp
 TEST(ThreadGrasp, TheJawsTakeTheThreadAndLiftIt) {
   const core::Model m = thread_grasp_rig(5.0, false);
   core::Data d = core::make_data(m);
-  double theta = 60 * kDeg, opening_at_grasp = 0.0;
+  double theta = 60 * kGraspDeg, opening_at_grasp = 0.0;
   const int grasped = close_on_thread(m, d, theta, &opening_at_grasp);
   ASSERT_GE(grasped, 0) << "the jaws never took the thread";
   const core::GraspState& g = d.grasps[0];
@@ -159,12 +159,13 @@ TEST(ThreadGrasp, TheJawsTakeTheThreadAndLiftIt) {
     lowest = std::min(lowest, t.position[i].z());
     spread = std::max(spread, std::abs(t.position[i].z() - before[i].z() - rise));
   }
-  std::printf("[ figures  ] grasp at %.2f deg, %d nodes held (%d..%d); held node within %.4f mm of its "
-              "jaw points over the lift; rise %.3f mm, the others' rise within %.4f mm of it, lowest node "
-              "%.3f mm; stretch %.2e; jaw contacts while held %d; grip pull %.3e N\n",
-              opening_at_grasp / kDeg, g.num_thread_nodes, g.thread_nodes[0].node,
-              g.thread_nodes[static_cast<std::size_t>(g.num_thread_nodes - 1)].node, lag * 1e3, rise * 1e3,
-              spread * 1e3, lowest * 1e3, t.output.max_stretch, jaw_contacts, g.grip_force);
+  std::printf(
+      "[ figures  ] grasp at %.2f deg, %d nodes held (%d..%d); held node within %.4f mm of its "
+      "jaw points over the lift; rise %.3f mm, the others' rise within %.4f mm of it, lowest node "
+      "%.3f mm; stretch %.2e; jaw contacts while held %d; grip pull %.3e N\n",
+      opening_at_grasp / kGraspDeg, g.num_thread_nodes, g.thread_nodes[0].node,
+      g.thread_nodes[static_cast<std::size_t>(g.num_thread_nodes - 1)].node, lag * 1e3, rise * 1e3,
+      spread * 1e3, lowest * 1e3, t.output.max_stretch, jaw_contacts, g.grip_force);
   EXPECT_LT(lag, 0.05e-3);          // the held node follows its jaw points within 0.05 mm
   EXPECT_GT(rise, 0.012);           // lifted 12–15 mm (the tube's coupling gives a little)
   EXPECT_LT(spread, 0.5e-3);        // the rest of the thread rose with it, to 0.5 mm
@@ -185,9 +186,10 @@ TEST(ThreadGrasp, AGrasperWithoutThreadGraspingTakesNothing) {
   m.grasps[0].thread = false;
   ASSERT_EQ(core::finalize_model(m), "");
   core::Data d = core::make_data(m);
-  double theta = 60 * kDeg;
+  double theta = 60 * kGraspDeg;
   int touching = 0;
-  drive(m, d, 660, theta, -100 * kDeg, still, [&](int) { touching += d.threads[0].output.body_contacts > 0; });
+  drive(m, d, 660, theta, -100 * kGraspDeg, still,
+        [&](int) { touching += d.threads[0].output.body_contacts > 0; });
   EXPECT_EQ(d.grasps[0].grasps, 0);
   EXPECT_EQ(d.grasps[0].thread, -1);
   EXPECT_GT(touching, 0) << "the jaws never reached the thread: the test checks nothing";
@@ -214,9 +216,9 @@ TEST(ThreadGrasp, TheJawsTakeAThreadPinchedBetweenTwoNodes) {
   // jaws to squeeze deeper); lifted 15 mm, the thread follows.
   const core::Model m = thread_grasp_rig(5.0, false, 1e-3, 0.00075);
   core::Data d = core::make_data(m);
-  double theta = 60 * kDeg, opening = 0.0, nearest_gap = 1.0;
+  double theta = 60 * kGraspDeg, opening = 0.0, nearest_gap = 1.0;
   int grasped = -1;
-  ASSERT_TRUE(drive(m, d, 660, theta, -100 * kDeg, still, [&](int s) {
+  ASSERT_TRUE(drive(m, d, 660, theta, -100 * kGraspDeg, still, [&](int s) {
     if (d.grasps[0].event != core::GraspEvent::kGrasp) return;
     grasped = s;
     opening = d.grasps[0].opening;
@@ -229,11 +231,12 @@ TEST(ThreadGrasp, TheJawsTakeAThreadPinchedBetweenTwoNodes) {
   const double z0 = d.threads[0].position[10].z();
   ASSERT_TRUE(drive(m, d, 800, theta, 0.0, ramp(Vec3(0, 0, 0.015))));
   ASSERT_EQ(g.thread, 0);
-  std::printf("[ figures  ] between two nodes: grasp at %.2f deg, %d nodes held (%d..%d); at the grasp the "
-              "node nearest both jaws was %.3f mm out of a jaw sphere's reach; lifted %.3f mm\n",
-              opening / kDeg, g.num_thread_nodes, g.thread_nodes[0].node,
-              g.thread_nodes[static_cast<std::size_t>(g.num_thread_nodes - 1)].node, nearest_gap * 1e3,
-              (d.threads[0].position[10].z() - z0) * 1e3);
+  std::printf(
+      "[ figures  ] between two nodes: grasp at %.2f deg, %d nodes held (%d..%d); at the grasp the "
+      "node nearest both jaws was %.3f mm out of a jaw sphere's reach; lifted %.3f mm\n",
+      opening / kGraspDeg, g.num_thread_nodes, g.thread_nodes[0].node,
+      g.thread_nodes[static_cast<std::size_t>(g.num_thread_nodes - 1)].node, nearest_gap * 1e3,
+      (d.threads[0].position[10].z() - z0) * 1e3);
   EXPECT_GT(nearest_gap, 0.0);
   EXPECT_GT(d.threads[0].position[10].z() - z0, 0.012);
 }
@@ -243,7 +246,7 @@ TEST(ThreadGrasp, TheTensionNextToTheJawsIsTheGripsPull) {
   // thread and holds: the thread between tie and jaws taut, its tension the grip's pull.
   const core::Model m = thread_grasp_rig(5.0, true);
   core::Data d = core::make_data(m);
-  double theta = 60 * kDeg;
+  double theta = 60 * kGraspDeg;
   ASSERT_GE(close_on_thread(m, d, theta), 0);
   const core::GraspState& g = d.grasps[0];
   ASSERT_EQ(g.thread, 0);
@@ -269,7 +272,7 @@ TEST(ThreadGrasp, OpeningTheJawsLetsTheThreadFallFromWhereItWas) {
   // where it was (its nodes follow the step's free fall from their state at the release).
   const core::Model m = thread_grasp_rig(5.0, false, 0.0);
   core::Data d = core::make_data(m);
-  double theta = 60 * kDeg;
+  double theta = 60 * kGraspDeg;
   ASSERT_GE(close_on_thread(m, d, theta), 0);
   ASSERT_TRUE(drive(m, d, 700, theta, 0.0, ramp(Vec3(0, 0, 0.015))));
   ASSERT_EQ(d.grasps[0].thread, 0);
@@ -284,7 +287,7 @@ TEST(ThreadGrasp, OpeningTheJawsLetsTheThreadFallFromWhereItWas) {
   int after = 0;
   for (int s = 0; s < 400 && after < 30; ++s) {
     const Vec3 x_before = d.threads[0].position[n], v_before = d.threads[0].velocity[n];
-    ASSERT_TRUE(drive(m, d, 1, theta, 200 * kDeg, held_up));
+    ASSERT_TRUE(drive(m, d, 1, theta, 200 * kGraspDeg, held_up));
     if (released < 0 && d.grasps[0].event == core::GraspEvent::kRelease) {
       released = s;
       let_go_at = d.grasps[0].opening;
@@ -302,9 +305,10 @@ TEST(ThreadGrasp, OpeningTheJawsLetsTheThreadFallFromWhereItWas) {
   EXPECT_EQ(d.grasps[0].releases, 1);
   EXPECT_EQ(d.grasps[0].thread, -1);
   EXPECT_EQ(d.grasps[0].log[static_cast<std::size_t>(d.grasps[0].logged - 1)].thread, 0);
-  std::printf("[ figures  ] let go at %.1f deg; over the 30 ms after, node %d within %.2e mm of free fall "
-              "from where it was let go (it fell %.2f mm)\n",
-              let_go_at / kDeg, node, drift * 1e3, 0.5 * 9.81 * 0.03 * 0.03 * 1e3);
+  std::printf(
+      "[ figures  ] let go at %.1f deg; over the 30 ms after, node %d within %.2e mm of free fall "
+      "from where it was let go (it fell %.2f mm)\n",
+      let_go_at / kGraspDeg, node, drift * 1e3, 0.5 * 9.81 * 0.03 * 0.03 * 1e3);
   EXPECT_LT(drift, 0.01e-3);
 }
 
@@ -314,7 +318,7 @@ TEST(ThreadGrasp, APullPastTheGripsLimitSlips) {
   // it back.
   const core::Model m = thread_grasp_rig(0.5, true);
   core::Data d = core::make_data(m);
-  double theta = 60 * kDeg;
+  double theta = 60 * kGraspDeg;
   ASSERT_GE(close_on_thread(m, d, theta), 0);
   ASSERT_TRUE(drive(m, d, 1000, theta, 0.0, ramp(Vec3(0.004, 0, 0))));
   const core::GraspState& g = d.grasps[0];
@@ -335,7 +339,7 @@ TEST(ThreadGrasp, APullPastTheGripsLimitSlips) {
 TEST(ThreadGrasp, HoldingAThreadAllocatesNothing) {
   const core::Model m = thread_grasp_rig(5.0, false);
   core::Data d = core::make_data(m);
-  double theta = 60 * kDeg;
+  double theta = 60 * kGraspDeg;
   ASSERT_GE(close_on_thread(m, d, theta), 0);
   ASSERT_TRUE(drive(m, d, 600, theta, 0.0, ramp(Vec3(0, 0, 0.015))));  // lifted, held still
   ASSERT_EQ(d.grasps[0].thread, 0);

@@ -1,5 +1,9 @@
 #pragma once
 // Reading the CSV files a test wrote: the lines of a file, the cells of a line.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -24,6 +28,17 @@ inline std::vector<std::string> read_lines(const std::filesystem::path& p) {
   std::vector<std::string> lines;
   for (std::string line; std::getline(in, line);) lines.push_back(line);
   return lines;
+}
+
+/// The index of column `name` in a CSV header `header`; adds a test failure (and gives 0) when
+/// the header has no such column.
+inline std::size_t csv_column(const std::vector<std::string>& header, const std::string& name) {
+  const auto it = std::find(header.begin(), header.end(), name);
+  if (it == header.end()) {
+    ADD_FAILURE() << "no column " << name;
+    return 0;
+  }
+  return static_cast<std::size_t>(it - header.begin());
 }
 
 }  // namespace numen::test

@@ -1,16 +1,17 @@
 /// @file joint_system.cpp
 /// Baumgarte-stabilised joint rows of one step (paper Eq. 4–5); see joint_system.hpp.
 
+#include "articulation/joint_system.hpp"
+
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step_stages.hpp"
-
 #include "scratch/data_scratch.hpp"
-#include "articulation/joint_system.hpp"
 
 namespace numen::core {
 namespace {
@@ -30,8 +31,6 @@ BodyState drifted(const BodyState& s, const Vec6& u, double h) noexcept {
 double prescribed_value(const JointModel& j, const Data& data, std::size_t index) noexcept {
   return j.prescribed ? data.joint_prescribed[index].value : 0.0;
 }
-
-constexpr double kPi = 3.14159265358979323846;
 
 /// Twist of body b for the free drift of the step: zero for a known body.
 Vec6 moving_twist(const ArticulationScratch& a, std::span<const Vec6> twist0, int b) noexcept {
@@ -114,7 +113,8 @@ void build_joint_rows(const Model& model, Data& data, std::span<const Vec6> twis
       // The prescribed twist row is wrapped to (−π, π] at each evaluation:
       // wrap the difference too, or a lag near ±π would jump by 2π/h.
       const int r = start.count - 1;
-      drift_rate(r) = std::remainder(predicted.position_error(r) - c0(r), 2.0 * kPi) / h;
+      drift_rate(r) =
+          std::remainder(predicted.position_error(r) - c0(r), 2.0 * std::numbers::pi) / h;
     }
     // The trapezoidal rule's u0 is a node velocity, not a chord, and its end-of-step
     // projection (integrator_joints.cpp, RATTLE) makes G0 u0 = v_ref: there Ċ0 = G0 u0 − v_ref.

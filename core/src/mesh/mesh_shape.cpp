@@ -14,9 +14,7 @@
 namespace numen::core {
 namespace {
 
-using detail::box_distance2;
 using detail::consider;
-using detail::kInf;
 using detail::Nearest;
 using detail::signed_result;
 
@@ -29,18 +27,18 @@ Nearest search(const MeshShape& s, const Vec3& p, double bound) noexcept {
   std::int32_t stack[kStack];
   int sp = 0;
   const MeshBvhNode* nodes = s.nodes.data();
-  if (box_distance2(p, nodes[0].lo, nodes[0].hi) < best.distance2) stack[sp++] = 0;
+  if (detail::box_distance2(p, nodes[0].lo, nodes[0].hi) < best.distance2) stack[sp++] = 0;
   while (sp > 0) {
     const MeshBvhNode& node = nodes[stack[--sp]];
-    if (box_distance2(p, node.lo, node.hi) >= best.distance2) continue;
+    if (detail::box_distance2(p, node.lo, node.hi) >= best.distance2) continue;
     if (node.count > 0) {
       for (int t = node.index; t < node.index + node.count; ++t) consider(s, p, t, best);
       continue;
     }
     const std::int32_t first = static_cast<std::int32_t>(&node - nodes) + 1;
     const std::int32_t second = node.index;
-    const double d_first = box_distance2(p, nodes[first].lo, nodes[first].hi);
-    const double d_second = box_distance2(p, nodes[second].lo, nodes[second].hi);
+    const double d_first = detail::box_distance2(p, nodes[first].lo, nodes[first].hi);
+    const double d_second = detail::box_distance2(p, nodes[second].lo, nodes[second].hi);
     // Push the farther child first: the nearer one is searched first; when p is in both boxes
     // (both 0), the one whose centre is nearer.
     const bool first_nearer =
@@ -63,8 +61,8 @@ Nearest search(const MeshShape& s, const Vec3& p, double bound) noexcept {
 int build_node(MeshShape& s, const std::vector<Vec3>& centroid, const std::vector<Vec3>& tri_lo,
                const std::vector<Vec3>& tri_hi, std::vector<int>& order, int begin, int end,
                std::size_t at) {
-  Vec3 lo = Vec3::Constant(kInf), hi = Vec3::Constant(-kInf);
-  Vec3 clo = Vec3::Constant(kInf), chi = Vec3::Constant(-kInf);
+  Vec3 lo = Vec3::Constant(detail::kInf), hi = Vec3::Constant(-detail::kInf);
+  Vec3 clo = Vec3::Constant(detail::kInf), chi = Vec3::Constant(-detail::kInf);
   for (int i = begin; i < end; ++i) {
     const auto t = static_cast<std::size_t>(order[static_cast<std::size_t>(i)]);
     lo = lo.cwiseMin(tri_lo[t]);
@@ -171,7 +169,7 @@ void build_grid(MeshShape& s) {
     for (int y = 0; y < s.grid_cells[1]; ++y)
       for (int x = 0; x < s.grid_cells[0]; ++x) {
         const Vec3 c = s.grid_origin + s.grid_cell * Vec3(x + 0.5, y + 0.5, z + 0.5);
-        const Nearest n = search(s, c, kInf);
+        const Nearest n = search(s, c, detail::kInf);
         s.grid_distance[i++] = static_cast<float>(signed_result(s, c, n).distance);
       }
 }
@@ -256,7 +254,7 @@ bool mesh_signed_distance(const MeshShape& s, const Vec3& p, double reach,
                           MeshDistance& out) noexcept {
   if (!p.allFinite() || s.nodes.empty()) return false;
   // Outside the bounds is outside the mesh: beyond reach of the box, no contact.
-  const double outside2 = box_distance2(p, s.aabb_min, s.aabb_max);
+  const double outside2 = detail::box_distance2(p, s.aabb_min, s.aabb_max);
   if (outside2 > 0.0 && outside2 >= reach * reach) return false;
   {
     // The narrow band: exact when the nearest listed triangle is within its width.
@@ -266,7 +264,7 @@ bool mesh_signed_distance(const MeshShape& s, const Vec3& p, double reach,
       return out.distance < reach;
     }
   }
-  double bound = kInf;
+  double bound = detail::kInf;
   if (outside2 > 0.0) {
     bound = reach;  // outside the mesh: only a distance below reach matters
   } else if (!s.grid_distance.empty()) {

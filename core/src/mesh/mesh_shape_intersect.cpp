@@ -56,7 +56,7 @@ bool inside2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, int i, 
   return (s1 >= 0 && s2 >= 0 && s3 >= 0) || (s1 <= 0 && s2 <= 0 && s3 <= 0);
 }
 
-bool boxes_overlap(const MeshBvhNode& a, const MeshBvhNode& b) noexcept {
+bool bvh_nodes_overlap(const MeshBvhNode& a, const MeshBvhNode& b) noexcept {
   return (a.lo.array() <= b.hi.array()).all() && (b.lo.array() <= a.hi.array()).all();
 }
 
@@ -118,7 +118,7 @@ MeshSelfIntersections find_self_intersections(const MeshShape& s) {
       }
       continue;
     }
-    if (!boxes_overlap(a, b)) continue;
+    if (!bvh_nodes_overlap(a, b)) continue;
     if (a.count > 0 && b.count > 0) {
       for (int t = a.index; t < a.index + a.count; ++t)
         for (int u = b.index; u < b.index + b.count; ++u) test(t, u);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <string>
 
 #include "numen/core/grasp.hpp"
@@ -15,8 +16,6 @@
 namespace numen::core {
 namespace {
 
-constexpr double kPi = 3.141592653589793;
-
 /// θ of arc parameter s (clamped to [0, L]).
 double arc_angle_at(const NeedleModel& n, double s) noexcept {
   return n.tail_angle + std::clamp(s, 0.0, n.length()) / n.radius;
@@ -25,14 +24,15 @@ double arc_angle_at(const NeedleModel& n, double s) noexcept {
 }  // namespace
 
 double needle_steel_mass(double radius, double arc, double wire_radius) noexcept {
-  return kNeedleSteelDensity * kPi * wire_radius * wire_radius * radius * 2.0 * kPi * arc;
+  return kNeedleSteelDensity * std::numbers::pi * wire_radius * wire_radius * radius * 2.0 *
+         std::numbers::pi * arc;
 }
 
 int add_needle(Model& model, const NeedleSpec& spec) {
   NeedleModel n;
   n.name = spec.name;
   n.radius = spec.radius;
-  n.arc_angle = 2.0 * kPi * spec.arc;
+  n.arc_angle = 2.0 * std::numbers::pi * spec.arc;
   n.wire_radius = spec.wire_radius;
   n.tail_angle = -0.5 * n.arc_angle;
   n.tip_angle = 0.5 * n.arc_angle;
@@ -93,8 +93,12 @@ double needle_closest_parameter(const NeedleModel& needle, const Vec3& point) no
   const double theta = std::atan2(q.y(), q.x());  // in (−π, π]; the arc is [−φ/2, φ/2] ⊂ (−π, π)
   if (theta >= needle.tail_angle && theta <= needle.tip_angle) return (theta - needle.tail_angle) * needle.radius;
   // In the gap: the nearer end (by the angle, the same as by distance on the circle).
-  const double to_tip = theta > needle.tip_angle ? theta - needle.tip_angle : theta - needle.tip_angle + 2.0 * kPi;
-  const double to_tail = theta < needle.tail_angle ? needle.tail_angle - theta : needle.tail_angle - theta + 2.0 * kPi;
+  const double to_tip = theta > needle.tip_angle
+                            ? theta - needle.tip_angle
+                            : theta - needle.tip_angle + 2.0 * std::numbers::pi;
+  const double to_tail = theta < needle.tail_angle
+                             ? needle.tail_angle - theta
+                             : needle.tail_angle - theta + 2.0 * std::numbers::pi;
   return to_tip < to_tail ? needle.length() : 0.0;
 }
 
@@ -109,11 +113,12 @@ std::string finalize_needles(const Model& model) {
     if (!(n.radius > n.wire_radius) || !std::isfinite(n.radius))
       return who + "radius (" + std::to_string(n.radius) + " m) must exceed wire_radius (" +
              std::to_string(n.wire_radius) + " m)";
-    if (!(n.arc_angle > 0.0) || !(n.arc_angle < 2.0 * kPi))
-      return who + "arc must be a fraction of a circle in (0, 1), got " + std::to_string(n.arc_angle / (2.0 * kPi));
+    if (!(n.arc_angle > 0.0) || !(n.arc_angle < 2.0 * std::numbers::pi))
+      return who + "arc must be a fraction of a circle in (0, 1), got " +
+             std::to_string(n.arc_angle / (2.0 * std::numbers::pi));
     if (!std::isnan(n.puncture_force) && !(n.puncture_force > 0.0 && std::isfinite(n.puncture_force)))
       return who + "puncture_force must be > 0 (N), got " + std::to_string(n.puncture_force);
-    if (!(n.puncture_max_angle > 0.0 && n.puncture_max_angle <= 0.5 * kPi))
+    if (!(n.puncture_max_angle > 0.0 && n.puncture_max_angle <= 0.5 * std::numbers::pi))
       return who + "puncture_max_angle must be in (0, π/2] (rad), got " + std::to_string(n.puncture_max_angle);
     if (!(n.tie_stiffness > 0.0 && std::isfinite(n.tie_stiffness)))
       return who + "tie_stiffness must be > 0 (N/m), got " + std::to_string(n.tie_stiffness);

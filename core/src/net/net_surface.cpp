@@ -318,8 +318,8 @@ void net_face_bounds(const Model& model, const NodeState* nodes, int f, Vec3& lo
   hi = a.cwiseMax(b).cwiseMax(c);
 }
 
-/// Whether every component of `v` is finite (Eigen's allFinite(), without its loop).
-inline bool finite(const Vec3& v) noexcept {
+/// Whether every component of `v` is finite_point (Eigen's allFinite(), without its loop).
+inline bool finite_point(const Vec3& v) noexcept {
   return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
 }
 
@@ -331,9 +331,9 @@ constexpr double kClusterSlack = 1e-6;
 /// `num_spheres`) whose radius reaches patch `pc` (NetSurfaceCluster, its first record) at the
 /// nodes' current positions: the bounds of its records' parallelograms, grown by its largest
 /// offset and kClusterSlack, and for a patch on one net triangle that parallelogram (its two
-/// triangles) grown likewise. A sphere left out is at least its radius from every point of the patch's
-/// triangles, so none of them touches it or passes within kSamePoint of a point that does.
-/// Non-finite nodes give no sphere.
+/// triangles) grown likewise. A sphere left out is at least its radius from every point of the
+/// patch's triangles, so none of them touches it or passes within kSamePoint of a point that does.
+/// Non-finite_point nodes give no sphere.
 std::uint64_t cluster_spheres(const Model& model, const CollisionScratch& cs,
                               const std::int32_t* near, const NodeState* nodes, int pc,
                               std::uint64_t close, int num_spheres) noexcept {
@@ -390,7 +390,7 @@ std::uint64_t cluster_spheres(const Model& model, const CollisionScratch& cs,
   return bits;
 }
 
-/// The near spheres with a finite centre sorted along the axis `axis` of the query box
+/// The near spheres with a finite_point centre sorted along the axis `axis` of the query box
 /// (NetScratch::near_order / near_key; insertion sort: a tool's few dozen), and the sweep's
 /// half-width: the largest radius plus `reach` (and kMargin).
 struct NearSweep {
@@ -508,7 +508,7 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
     if (cull_face(model, ns, f)) continue;
     Vec3 lo, hi;
     net_face_bounds(model, nodes, f, lo, hi);
-    if (!boxes_overlap(lo, hi, plo, phi) || !finite(lo) || !finite(hi)) continue;
+    if (!boxes_overlap(lo, hi, plo, phi) || !finite_point(lo) || !finite_point(hi)) continue;
     const std::uint64_t close = net_face_spheres(model, cs, ns, nodes, f, lo, hi, sweep, reach);
     if (close == 0) continue;
     face_now = f;
@@ -557,7 +557,8 @@ int gather_surface_candidates(const Model& model, const Data& data, NetScratch& 
         const Vec3& b = position(t[1]);
         const Vec3& c = position(t[2]);
         const Vec3 flo = a.cwiseMin(b).cwiseMin(c), fhi = a.cwiseMax(b).cwiseMax(c);
-        if (!boxes_overlap(flo, fhi, qlo, qhi) || !finite(flo) || !finite(fhi)) continue;
+        if (!boxes_overlap(flo, fhi, qlo, qhi) || !finite_point(flo) || !finite_point(fhi))
+          continue;
         ns.surface_candidates[static_cast<std::size_t>(nc)] = F;
         ns.surface_lo[static_cast<std::size_t>(nc)] = flo;
         ns.surface_hi[static_cast<std::size_t>(nc)] = fhi;
@@ -611,7 +612,7 @@ void collide_net_faces(const Model& model, const Data& data, NetScratch& ns, con
     return;
   }
 
-  // Candidates: the net's triangles whose bounds meet them (non-finite nodes never do).
+  // Candidates: the net's triangles whose bounds meet them (non-finite_point nodes never do).
   const int room = static_cast<int>(ns.face_candidates.size());
   int nc = 0;
   node_outcodes(data, ns, net, qlo, qhi);

@@ -15,7 +15,7 @@
 namespace numen::hal {
 namespace {
 
-bool reserved_cob_id(std::uint32_t id) noexcept {
+bool reserved_admittance_cob_id(std::uint32_t id) noexcept {
   return id < 0x001 || id > 0x7FF || (id >= 0x080 && id <= 0x0FF) || (id >= 0x700 && id <= 0x77F);
 }
 
@@ -41,7 +41,7 @@ void validate(const DeviceConfig& device, const AdmittanceConfig& admittance) {
     const std::uint32_t id = admittance.rpdo_cob_ids[i];
     const std::string where =
         name + ": axis " + device.axes[i].name + " rpdo_cob_id " + std::to_string(id);
-    if (reserved_cob_id(id))
+    if (reserved_admittance_cob_id(id))
       throw std::invalid_argument(where + " is not a free 11-bit PDO COB-ID");
     if (id == f || id == t) throw std::invalid_argument(where + " is a force sensor COB-ID");
     for (std::size_t j = 0; j < device.axes.size(); ++j) {

@@ -17,8 +17,6 @@
 namespace numen::hal {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 [[noreturn]] void fail(std::string_view where, const char* field, const std::string& what) {
   throw std::invalid_argument(std::string(where) + ": " + field + " " + what);
 }
@@ -35,8 +33,8 @@ std::string num(double v) {
 
 double wrap_angle(double angle) noexcept {
   if (!std::isfinite(angle)) return angle;
-  double r = std::remainder(angle, 2.0 * kPi);  // [-π, π]
-  if (r <= -kPi) r += 2.0 * kPi;                // (-π, π]
+  double r = std::remainder(angle, 2.0 * std::numbers::pi);  // [-π, π]
+  if (r <= -std::numbers::pi) r += 2.0 * std::numbers::pi;   // (-π, π]
   return r;
 }
 
@@ -108,7 +106,7 @@ void validate_axis(const AxisConfig& a, std::string_view where) {
   if (!(a.min < a.max)) {
     fail(where, "min", "must be < max (got min " + num(a.min) + ", max " + num(a.max) + ")");
   }
-  if (a.wraps && (a.min < -kPi - 1e-12 || a.max > kPi + 1e-12)) {
+  if (a.wraps && (a.min < -std::numbers::pi - 1e-12 || a.max > std::numbers::pi + 1e-12)) {
     fail(where, "min/max",
          "of a wrapping axis must lie in [-pi, pi] (got min " + num(a.min) + ", max " + num(a.max) +
              ")");

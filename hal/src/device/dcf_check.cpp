@@ -11,7 +11,7 @@
 namespace numen::hal {
 namespace {
 
-constexpr std::uint32_t kPdoInvalidBit = 0x80000000u;
+constexpr std::uint32_t kCobIdInvalidBit = 0x80000000u;
 
 using detail::hex_digits;
 
@@ -37,7 +37,7 @@ void check_pdo(const Dcf& dcf, std::uint16_t first_comm, std::uint32_t cob_id,
     std::uint64_t cob = 0;
     const DcfEntry* cob_entry = nullptr;
     if (!value_of(dcf, {static_cast<std::uint16_t>(comm), 1}, cob, &cob_entry)) continue;
-    if ((cob & kPdoInvalidBit) != 0 || (cob & 0x1FFFFFFFu) != cob_id) continue;
+    if ((cob & kCobIdInvalidBit) != 0 || (cob & 0x1FFFFFFFu) != cob_id) continue;
     const auto map = static_cast<std::uint16_t>(comm + 0x200);
     std::uint64_t n = 0;
     const DcfEntry* count = nullptr;

@@ -20,8 +20,6 @@
 namespace numen::hal {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 std::string device_name(const DeviceConfig& c) { return "device '" + c.name + "'"; }
 
 [[noreturn]] void fail(const DeviceConfig& c, const std::string& field, const std::string& what) {
@@ -368,7 +366,7 @@ void add_canopen(DeviceConfig& c, std::uint8_t first) {
 
 DeviceConfig make_default_trocar_config(std::uint8_t first) {
   check_node_range(first, TrocarKinematics::kNumAxes, "make_default_trocar_config");
-  const double per_rad = 16384.0 / (2.0 * kPi);  // 14-bit single-turn encoder
+  const double per_rad = 16384.0 / (2.0 * std::numbers::pi);  // 14-bit single-turn encoder
   const double per_m = 1e5;                      // 10 µm linear scale
   const auto n = [first](int i) { return static_cast<std::uint8_t>(first + i); };
   DeviceConfig c;
@@ -378,9 +376,11 @@ DeviceConfig make_default_trocar_config(std::uint8_t first) {
   c.axes.push_back(axis("pivot_x", n(0), true, per_rad, -1.2, 1.2, 10.0, false, 0.5, 1.0));
   c.axes.push_back(axis("pivot_y", n(1), true, per_rad, -1.2, 1.2, 10.0, false, 0.5, 1.0));
   c.axes.push_back(axis("depth", n(2), true, per_m, 0.0, 0.35, 2.0, false, 5.0, 10.0));
-  c.axes.push_back(axis("roll", n(3), false, per_rad, -kPi, kPi, 30.0, true, 1.0, 0.0));
+  c.axes.push_back(axis("roll", n(3), false, per_rad, -std::numbers::pi, std::numbers::pi, 30.0,
+                        true, 1.0, 0.0));
   // jaw: one turn of its single-turn encoder; recorded gripper angles go negative (squeeze).
-  c.axes.push_back(axis("jaw", n(4), false, per_rad, -kPi, kPi, 30.0, false, 1.0, 0.0));
+  c.axes.push_back(axis("jaw", n(4), false, per_rad, -std::numbers::pi, std::numbers::pi, 30.0,
+                        false, 1.0, 0.0));
   add_canopen(c, first);
   return c;
 }
@@ -396,17 +396,21 @@ DeviceConfig make_default_pose_tracker_config(std::uint8_t first) {
   c.axes.push_back(axis("x", n(0), false, um, -1.0, 1.0, 5.0, false, 1.0, 0.0));
   c.axes.push_back(axis("y", n(1), false, um, -1.0, 1.0, 5.0, false, 1.0, 0.0));
   c.axes.push_back(axis("z", n(2), false, um, -1.0, 1.0, 5.0, false, 1.0, 0.0));
-  c.axes.push_back(axis("yaw", n(3), false, urad, -kPi, kPi, 30.0, true, 1.0, 0.0));
-  c.axes.push_back(axis("pitch", n(4), false, urad, -kPi / 2, kPi / 2, 30.0, false, 1.0, 0.0));
-  c.axes.push_back(axis("roll", n(5), false, urad, -kPi, kPi, 30.0, true, 1.0, 0.0));
+  c.axes.push_back(
+      axis("yaw", n(3), false, urad, -std::numbers::pi, std::numbers::pi, 30.0, true, 1.0, 0.0));
+  c.axes.push_back(axis("pitch", n(4), false, urad, -std::numbers::pi / 2, std::numbers::pi / 2,
+                        30.0, false, 1.0, 0.0));
+  c.axes.push_back(
+      axis("roll", n(5), false, urad, -std::numbers::pi, std::numbers::pi, 30.0, true, 1.0, 0.0));
   add_canopen(c, first);
   return c;
 }
 
 DeviceConfig make_default_phantom_config(std::uint8_t first) {
   check_node_range(first, PhantomKinematics::kNumAxes, "make_default_phantom_config");
-  const double per_rad_arm = 65536.0 / (2.0 * kPi);     // motor encoders through the capstan
-  const double per_rad_gimbal = 16384.0 / (2.0 * kPi);  // 14-bit gimbal encoders
+  const double per_rad_arm =
+      65536.0 / (2.0 * std::numbers::pi);  // motor encoders through the capstan
+  const double per_rad_gimbal = 16384.0 / (2.0 * std::numbers::pi);  // 14-bit gimbal encoders
   const auto n = [first](int i) { return static_cast<std::uint8_t>(first + i); };
   DeviceConfig c;
   c.name = "phantom";
@@ -419,8 +423,8 @@ DeviceConfig make_default_phantom_config(std::uint8_t first) {
       axis("gimbal_yaw", n(3), false, per_rad_gimbal, -2.6, 2.6, 30.0, false, 1.0, 0.0));
   c.axes.push_back(
       axis("gimbal_pitch", n(4), false, per_rad_gimbal, -1.2, 1.2, 30.0, false, 1.0, 0.0));
-  c.axes.push_back(
-      axis("stylus_roll", n(5), false, per_rad_gimbal, -kPi, kPi, 30.0, true, 1.0, 0.0));
+  c.axes.push_back(axis("stylus_roll", n(5), false, per_rad_gimbal, -std::numbers::pi,
+                        std::numbers::pi, 30.0, true, 1.0, 0.0));
   add_canopen(c, first);
   return c;
 }

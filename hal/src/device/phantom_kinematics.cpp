@@ -21,8 +21,6 @@ using core::Quat;
 using core::Vec3;
 using detail::axis_rotation;
 
-constexpr double kPi = std::numbers::pi;
-
 constexpr const char* kPhantomLinkNames[PhantomKinematics::kNumLinks] = {
     "tool", "turret", "upper_arm", "forearm", "stylus"};
 
@@ -194,7 +192,8 @@ AxisVector PhantomKinematics::inverse(const core::Pose& pose,
   // Clamp the shoulder–gimbal distance into the workspace shell [|l1 − l2|, l1 + l2]; a
   // target at the shoulder itself is taken straight below it.
   const double raw = std::hypot(rho, h);
-  const double phi = raw > 1e-12 ? std::atan2(h, rho) : -0.5 * kPi;  // direction from the shoulder
+  const double phi =
+      raw > 1e-12 ? std::atan2(h, rho) : -0.5 * std::numbers::pi;  // direction from the shoulder
   const double d = std::clamp(raw, std::abs(l1 - l2), l1 + l2);
   const double gr = d * std::cos(phi);
   const double gh = d * std::sin(phi);

@@ -27,7 +27,7 @@ std::uint32_t current(const ObjectDictionary& od, SdoAddress a) noexcept {
 bool receive_pdo(std::uint16_t index) noexcept { return index < 0x1800; }  // 0x14xx / 0x16xx
 
 /// COB-IDs an enabled PDO may not use: NMT, SYNC / EMCY, SDO, heartbeat, LSS.
-bool reserved_cob_id(std::uint32_t id) noexcept {
+bool reserved_pdo_cob_id(std::uint32_t id) noexcept {
   return id == 0 || (id >= 0x080 && id <= 0x0FF) || (id >= 0x581 && id <= 0x5FF) ||
          (id >= 0x601 && id <= 0x67F) || (id >= 0x701 && id <= 0x77F) || id == 0x7E4 || id == 0x7E5;
 }
@@ -37,7 +37,7 @@ std::uint32_t check_cob_id(const ObjectDictionary& od, SdoAddress a, std::span<c
   if ((v & 0x20000000u) != 0 || (v & 0x1FFFF800u) != 0) return SdoAbort::kInvalidValue;
   if ((v & kInvalidBit) != 0) return 0;  // disabling (with any id) is always allowed
   const std::uint32_t cur = current(od, a);
-  if (reserved_cob_id(v & 0x7FFu)) return SdoAbort::kInvalidValue;
+  if (reserved_pdo_cob_id(v & 0x7FFu)) return SdoAbort::kInvalidValue;
   if ((cur & kInvalidBit) == 0 && (cur & 0x7FFu) != (v & 0x7FFu)) return SdoAbort::kInvalidValue;
   return 0;
 }

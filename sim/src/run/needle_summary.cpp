@@ -43,7 +43,9 @@ double distance_mm(const std::array<double, 3>& a, const std::array<double, 3>& 
                          (a[2] - b[2]) * (a[2] - b[2]));
 }
 
-const char* plural(std::int64_t n, const char* one, const char* many) noexcept { return n == 1 ? one : many; }
+const char* plural_of(std::int64_t n, const char* one, const char* many) noexcept {
+  return n == 1 ? one : many;
+}
 
 }  // namespace
 
@@ -147,10 +149,10 @@ void summarize_needles(RunSummary& s) {
     }
     std::ostringstream os;
     os << std::fixed << std::setprecision(3) << r.name << ": " << r.punctures << " "
-       << plural(r.punctures, "puncture", "punctures") << ", " << r.exits << " "
-       << plural(r.exits, "exit", "exits") << ", " << r.releases << " "
-       << plural(r.releases, "release", "releases") << ", " << r.tunnels << " "
-       << plural(r.tunnels, "tunnel", "tunnels") << "; ";
+       << plural_of(r.punctures, "puncture", "punctures") << ", " << r.exits << " "
+       << plural_of(r.exits, "exit", "exits") << ", " << r.releases << " "
+       << plural_of(r.releases, "release", "releases") << ", " << r.tunnels << " "
+       << plural_of(r.tunnels, "tunnel", "tunnels") << "; ";
     // One pass (and at most one mark each): "through (in at …, out at …)"; more: each pass by its
     // number, with its marks.
     const bool several = r.num_passes > 1 || marked > 1;
@@ -204,10 +206,13 @@ void summarize_needles(RunSummary& s) {
     s.needle_lines.push_back(os.str());
     if (r.tunnels > 0) {
       std::ostringstream w;
-      w << std::fixed << std::setprecision(3) << "needle '" << r.name << "' went into tissue without puncturing it "
-        << r.tunnels << " " << plural(r.tunnels, "time", "times") << ", the first at " << r.first_tunnel_s
-        << " s (a tunnel: its tip crossed a net's surface inwards within one step, past the contact that "
-           "should have held it until the puncture force; docs/suturing.md, \"The needle through tissue\")";
+      w << std::fixed << std::setprecision(3) << "needle '" << r.name
+        << "' went into tissue without puncturing it " << r.tunnels << " "
+        << plural_of(r.tunnels, "time", "times") << ", the first at " << r.first_tunnel_s
+        << " s (a tunnel: its tip crossed a net's surface inwards within one step, past the "
+           "contact that "
+           "should have held it until the puncture force; docs/suturing.md, \"The needle through "
+           "tissue\")";
       s.warnings.push_back(w.str());
     }
   }

@@ -37,7 +37,9 @@ std::optional<int> whole_decimal(std::string_view text) {
   return v;
 }
 
-std::string quoted(std::string_view text) { return "\"" + InputError::visible(text, true) + "\""; }
+std::string quoted_visible(std::string_view text) {
+  return "\"" + InputError::visible(text, true) + "\"";
+}
 
 /// "<study>-shard-<I>-of-<N>.json" → (study, shard), study "stability", "accuracy" or
 /// "passivity"; nullopt
@@ -83,16 +85,18 @@ Shard parse_shard(std::string_view text, const std::string& key) {
   const std::size_t slash = text.find('/');
   const std::string expected = " (expected I/N: shard I of N, 0 <= I < N, e.g. 0/4)";
   if (slash == std::string_view::npos)
-    throw InputError("", 0, 0, key, quoted(text) + " has no '/'" + expected);
+    throw InputError("", 0, 0, key, quoted_visible(text) + " has no '/'" + expected);
   const auto i = whole_decimal(text.substr(0, slash));
   const auto n = whole_decimal(text.substr(slash + 1));
   if (!i)
-    throw InputError("", 0, 0, key,
-                     "shard index in " + quoted(text) + " is not a whole number" + expected);
+    throw InputError(
+        "", 0, 0, key,
+        "shard index in " + quoted_visible(text) + " is not a whole number" + expected);
   if (!n || *n < 1)
     throw InputError("", 0, 0, key,
-                     "shard count in " + quoted(text) + " is not a whole number from 1 to " +
-                         std::to_string(kMaxShards) + expected);
+                     "shard count in " + quoted_visible(text) +
+                         " is not a whole number from 1 to " + std::to_string(kMaxShards) +
+                         expected);
   if (*i >= *n)
     throw InputError("", 0, 0, key,
                      "shard index " + std::to_string(*i) + " is not below the count " +
@@ -120,9 +124,9 @@ std::optional<Shard> shard_from_environment(const std::function<const char*(cons
   if (!n || *n < 1)
     throw InputError(
         "", 0, 0, kCount,
-        quoted(count) + " is not a whole number from 1 to " + std::to_string(kMaxShards));
+        quoted_visible(count) + " is not a whole number from 1 to " + std::to_string(kMaxShards));
   const auto i = whole_decimal(id);
-  if (!i) throw InputError("", 0, 0, kId, quoted(id) + " is not a whole number");
+  if (!i) throw InputError("", 0, 0, kId, quoted_visible(id) + " is not a whole number");
   if (*i >= *n)
     throw InputError("", 0, 0, kId,
                      std::to_string(*i) + " is not below " + kCount + " = " + std::to_string(*n) +
@@ -424,7 +428,7 @@ ShardSet read_shard_set(const std::filesystem::path& dir, const std::string& stu
       const auto shown = [&](const Json& m) {
         return m.contains(key) ? json_input::shown(m.at(key)) : std::string("absent");
       };
-      // The key is the file's: quoted by its first bytes, as the values are.
+      // The key is the file's: quoted_visible by its first bytes, as the values are.
       const std::string named = key.size() > json_input::kShownBytes
                                     ? key.substr(0, json_input::kShownBytes) + "..."
                                     : key;

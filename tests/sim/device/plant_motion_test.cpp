@@ -1,5 +1,5 @@
 /// @file plant_motion_test.cpp
-/// The closed loop's emulated device (sim/device/plant_motion.hpp) on a pose tracker: a free
+/// The closed loop's emulated device (sim/device/plant_motion.hpp) on a pose tracker_device: a free
 /// axis under the drive's torque, the hand pulling the handle to the intent, stiction holding
 /// it, the torque's arrival within the period, the port energy of a passive device, limit-cycle
 /// detection on clean signals, divergence, refused settings, no allocation.
@@ -23,7 +23,7 @@ namespace {
 using numen::test::kMs;
 using numen::test::kPi;
 
-hal::DeviceConfig tracker() { return hal::make_default_pose_tracker_config(1); }
+hal::DeviceConfig tracker_device() { return hal::make_default_pose_tracker_config(1); }
 
 /// A trajectory holding the tool at `x` (m) for 10 s, sampled at 1 ms.
 Trajectory still_at(const core::Vec3& x) {
@@ -63,7 +63,7 @@ TEST(PlantMotion, FreeAxisFollowsTheDrivesTorque) {
   const Trajectory traj = still_at(core::Vec3::Zero());
   DevicePlantSettings s = plant();
   s.torque_phase_s = 0.0;
-  PlantMotion m(tracker(), s, no_hand(), traj);
+  PlantMotion m(tracker_device(), s, no_hand(), traj);
   (void)m.at_sync(0, torque_on_x(0.0));
   for (int k = 1; k <= 1000; ++k) (void)m.at_sync(k * kMs, torque_on_x(0.2));
   EXPECT_NEAR(m.state().q[0], 0.5 * 2.0 * 1.0, 1e-9);
@@ -72,7 +72,7 @@ TEST(PlantMotion, FreeAxisFollowsTheDrivesTorque) {
   // With the torque arriving 0.25 ms after each SYNC, each period's first quarter still holds
   // the previous command: one quarter-period less of it overall.
   s.torque_phase_s = 0.25e-3;
-  PlantMotion late(tracker(), s, no_hand(), traj);
+  PlantMotion late(tracker_device(), s, no_hand(), traj);
   (void)late.at_sync(0, torque_on_x(0.0));
   for (int k = 1; k <= 1000; ++k) (void)late.at_sync(k * kMs, torque_on_x(0.2));
   EXPECT_NEAR(late.state().qdot[0], 2.0 * (1.0 - 0.25e-3), 1e-9);
@@ -84,7 +84,7 @@ TEST(PlantMotion, ALateSyncIsIntegratedAndALongSilenceRestarts) {
   const Trajectory traj = still_at(core::Vec3(0.01, 0.0, 0.0));
   DevicePlantSettings s = plant();
   s.torque_phase_s = 0.0;
-  PlantMotion m(tracker(), s, no_hand(), traj);
+  PlantMotion m(tracker_device(), s, no_hand(), traj);
   (void)m.at_sync(0, torque_on_x(0.0));
   (void)m.at_sync(1 * kMs, torque_on_x(0.2));
   (void)m.at_sync(6 * kMs, torque_on_x(0.2));
@@ -99,7 +99,7 @@ TEST(PlantMotion, ALateSyncIsIntegratedAndALongSilenceRestarts) {
 // so it is moved by the hand's 10 mm offset only.
 TEST(PlantMotion, TheHandPullsTheHandleToTheIntent) {
   const Trajectory traj = still_at(core::Vec3(0.01, 0.0, 0.0));
-  PlantMotion m(tracker(), plant(0.1, 2.0), HandSettings{}, traj);
+  PlantMotion m(tracker_device(), plant(0.1, 2.0), HandSettings{}, traj);
   (void)m.at_sync(0, torque_on_x(0.0));
   EXPECT_NEAR(m.state().q[0], 0.01, 1e-12) << "the device starts where the hand is";
   // Push the device off the intent with a torque pulse, then let the hand bring it back.
@@ -119,7 +119,7 @@ TEST(PlantMotion, AnUndrivenDeviceNeverGivesEnergyBack) {
   for (std::size_t k = 0; k < poses.size(); ++k)
     poses[k].position = core::Vec3(0.02 * std::sin(2 * kPi * 3.0 * k * 1e-3), 0.0, 0.0);
   const Trajectory traj(1e-3, poses);
-  PlantMotion m(tracker(), plant(0.1, 0.5, 0.05), HandSettings{}, traj);
+  PlantMotion m(tracker_device(), plant(0.1, 0.5, 0.05), HandSettings{}, traj);
   for (int k = 0; k <= 3000; ++k) (void)m.at_sync(k * kMs, torque_on_x(0.0));
   EXPECT_GT(m.figures().port_energy_j, 0.0);
   EXPECT_GE(m.figures().port_energy_min_j, -1e-6 * m.figures().port_energy_j);
@@ -128,7 +128,7 @@ TEST(PlantMotion, AnUndrivenDeviceNeverGivesEnergyBack) {
 // Stiction: a torque at or below f_c on an axis at rest does not move it.
 TEST(PlantMotion, CoulombFrictionHoldsAWeakTorque) {
   const Trajectory traj = still_at(core::Vec3::Zero());
-  PlantMotion m(tracker(), plant(0.1, 0.0, 0.3), no_hand(), traj);
+  PlantMotion m(tracker_device(), plant(0.1, 0.0, 0.3), no_hand(), traj);
   (void)m.at_sync(0, torque_on_x(0.0));
   for (int k = 1; k <= 200; ++k) (void)m.at_sync(k * kMs, torque_on_x(0.3));
   EXPECT_EQ(m.state().q[0], 0.0);
@@ -144,7 +144,7 @@ TEST(PlantMotion, AnAxisOfInertiaZeroFollowsTheIntent) {
   const Trajectory traj(1e-3, poses);
   DevicePlantSettings s = plant();
   s.axes[3].inertia = 0.0;
-  PlantMotion m(tracker(), s, HandSettings{}, traj);
+  PlantMotion m(tracker_device(), s, HandSettings{}, traj);
   for (int k = 0; k <= 1000; ++k) (void)m.at_sync(k * kMs, torque_on_x(0.0));
   EXPECT_NEAR(m.state().q[3], 0.2, 1e-9);
 }
@@ -153,13 +153,13 @@ TEST(PlantMotion, AnAxisOfInertiaZeroFollowsTheIntent) {
 // runaway speed (100 x its max_speed), and the plant holds.
 TEST(PlantMotion, ARunawayAxisIsFlagged) {
   const Trajectory traj = still_at(core::Vec3::Zero());
-  PlantMotion m(tracker(), plant(1e-6), no_hand(), traj);
+  PlantMotion m(tracker_device(), plant(1e-6), no_hand(), traj);
   (void)m.at_sync(0, torque_on_x(0.0));
   for (int k = 1; k <= 10; ++k) (void)m.at_sync(k * kMs, torque_on_x(1e3));
   EXPECT_TRUE(m.figures().diverged);
   EXPECT_EQ(m.figures().diverged_axis, 0);
   EXPECT_TRUE(std::isfinite(m.state().q[0]));
-  EXPECT_EQ(m.figures().diverged_speed_limit, 100.0 * tracker().axes[0].max_speed);
+  EXPECT_EQ(m.figures().diverged_speed_limit, 100.0 * tracker_device().axes[0].max_speed);
   EXPECT_GT(m.figures().diverged_speed, m.figures().diverged_speed_limit);
   EXPECT_EQ(m.figures().diverged_speed, std::abs(m.axis(0).qdot())) << "the speed that breached";
 }
@@ -168,7 +168,7 @@ TEST(PlantMotion, RefusesBadSettingsNamingThem) {
   const Trajectory traj = still_at(core::Vec3::Zero());
   const auto message = [&](const DevicePlantSettings& s, const HandSettings& h) {
     try {
-      PlantMotion m(tracker(), s, h, traj);
+      PlantMotion m(tracker_device(), s, h, traj);
     } catch (const std::invalid_argument& e) {
       return std::string(e.what());
     }
@@ -196,7 +196,7 @@ TEST(PlantMotion, AtSyncNeverAllocates) {
   s.torque_phase_s = 0.3e-3;
   s.axes[0].delay_periods = 2;
   s.axes[0].current_lag_s = 1e-4;
-  PlantMotion m(tracker(), s, HandSettings{}, traj);
+  PlantMotion m(tracker_device(), s, HandSettings{}, traj);
   (void)m.at_sync(0, torque_on_x(0.0));
   numen::test::AllocationGuard guard;
   for (int k = 1; k <= 500; ++k) (void)m.at_sync(k * kMs, torque_on_x(0.5 * std::sin(k * 0.1)));

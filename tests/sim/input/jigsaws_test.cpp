@@ -92,7 +92,7 @@ std::string join(const std::vector<std::string>& t) {
 }
 
 /// Character column (1-based) of token `index` in join(t).
-int column_of(const std::vector<std::string>& t, std::size_t index) {
+int trial_column(const std::vector<std::string>& t, std::size_t index) {
   int c = 1;
   for (std::size_t i = 0; i < index; ++i) c += 4 + static_cast<int>(t[i].size());
   return c + 4;
@@ -282,7 +282,7 @@ TEST(JigsawsMalformed, SeventySevenColumns) {
   t.push_back("0.5");
   const TempFile f("cols77.txt", join(t));
   const InputError e = expect_error(f.path(), 1);
-  EXPECT_EQ(e.column(), column_of(t, 76));
+  EXPECT_EQ(e.column(), trial_column(t, 76));
 }
 
 TEST(JigsawsMalformed, WordInsteadOfANumber) {
@@ -290,7 +290,7 @@ TEST(JigsawsMalformed, WordInsteadOfANumber) {
   t[4] = "abc";  // data column 5: master left R12
   const TempFile f("word.txt", valid_lines(1) + join(t) + valid_lines(2));
   const InputError e = expect_error(f.path(), 2);
-  EXPECT_EQ(e.column(), column_of(t, 4));
+  EXPECT_EQ(e.column(), trial_column(t, 4));
   EXPECT_EQ(e.key(), "master_left.R12");
   EXPECT_NE(std::string(e.what()).find("data column 5 of 76: 'abc' is not a number"),
             std::string::npos)
@@ -362,7 +362,7 @@ TEST(JigsawsMalformed, MatrixFarFromARotation) {
   const TempFile f("scaled.txt", valid_lines(4) + join(tokens(row)));
   const InputError e = expect_error(f.path(), 5);
   EXPECT_EQ(e.key(), "slave_right.rotation");
-  EXPECT_EQ(e.column(), column_of(tokens(row), 60));
+  EXPECT_EQ(e.column(), trial_column(tokens(row), 60));
   rot = identity_rotations();
   rot[3](2, 2) = -1.0;  // a reflection
   const TempFile g("reflection.txt", join(tokens(make_row(0, rot))));
@@ -454,7 +454,7 @@ TEST(JigsawsMalformed, ATipFartherThan10mIsLocatedAtItsColumn) {
     t[58] = far;  // data column 59: slave right tip y
     const TempFile f("far.txt", valid_lines(2) + join(t) + valid_lines(1));
     const InputError e = expect_error(f.path(), 3);
-    EXPECT_EQ(e.column(), column_of(t, 58));
+    EXPECT_EQ(e.column(), trial_column(t, 58));
     EXPECT_EQ(e.key(), "slave_right.tip_y");
     const std::string what = e.what();
     EXPECT_NE(what.find("data columns 58-60 of 76: tip position"), std::string::npos) << what;

@@ -22,7 +22,7 @@ using numen::sim::RunOptions;
 using numen::sim::RunSummary;
 using numen::sim::Scene;
 
-Scene shipped(const std::string& name) {
+Scene shipped_scene(const std::string& name) {
   return numen::sim::load_scene(std::string(NUMEN_SOURCE_DIR) + "/sim/scenes/" + name);
 }
 
@@ -50,7 +50,7 @@ void print(const char* what, const RunSummary& s) {
 
 // The construction scene with its coupling at 1e12 N/m threw a block at 55 m/s and exited 0.
 TEST(RunDivergence, ConstructionAtATeraNewtonCouplingStopsAsDiverged) {
-  const Scene scene = with_coupling_stiffness(shipped("construction.toml"), 1e12);
+  const Scene scene = with_coupling_stiffness(shipped_scene("construction.toml"), 1e12);
   const RunSummary s = numen::sim::run_scene(scene, RunOptions{});
   print("construction, k_t = 1e12", s);
   EXPECT_EQ(s.exit_status, numen::sim::code(numen::sim::ExitStatus::kDiverged));
@@ -71,7 +71,7 @@ TEST(RunDivergence, EndobagAtATeraNewtonCouplingStopsAsDiverged) {
   NUMEN_REQUIRE_ARTICULATION();
   NUMEN_SKIP_UNDER_SANITIZER("a deformable scene's periods are slow here; the monitor's causes "
                              "are tested in DivergenceMonitor.*");
-  const Scene scene = with_coupling_stiffness(shipped("endobag.toml"), 1e12);
+  const Scene scene = with_coupling_stiffness(shipped_scene("endobag.toml"), 1e12);
   const RunSummary s = numen::sim::run_scene(scene, RunOptions{});
   print("endobag, k_t = 1e12", s);
   EXPECT_EQ(s.exit_status, numen::sim::code(numen::sim::ExitStatus::kDiverged));
@@ -79,11 +79,11 @@ TEST(RunDivergence, EndobagAtATeraNewtonCouplingStopsAsDiverged) {
   EXPECT_LT(s.net_tie_stretch_max_mm, 1100.0) << "stopped long before the ties reach a metre";
 }
 
-// The shipped scenes at their own gains stay well inside every bound over their whole runs.
+// The shipped_scene scenes at their own gains stay well inside every bound over their whole runs.
 TEST(RunDivergence, ShippedScenesStayInsideTheBounds) {
   for (const char* name : {"lattice.toml", "construction.toml", "phantom.toml"}) {
     if (std::string(name) != "construction.toml" && !numen::core::kWithArticulation) continue;
-    const RunSummary s = numen::sim::run_scene(shipped(name), RunOptions{});
+    const RunSummary s = numen::sim::run_scene(shipped_scene(name), RunOptions{});
     print(name, s);
     EXPECT_FALSE(s.divergence.latched) << name;
     EXPECT_LT(s.divergence.speed_ratio_max, 0.5) << name;
@@ -100,7 +100,7 @@ TEST(RunDivergence, ShippedDeformableScenesStayInsideTheBounds) {
   RunOptions ten_seconds;  // the first 10 s hold each scene's contacts (CI time)
   ten_seconds.duration_s = 10.0;
   for (const char* name : {"deformable.toml", "endobag.toml", "mouse.toml"}) {
-    const RunSummary s = numen::sim::run_scene(shipped(name), ten_seconds);
+    const RunSummary s = numen::sim::run_scene(shipped_scene(name), ten_seconds);
     print(name, s);
     EXPECT_FALSE(s.divergence.latched) << name;
     EXPECT_LT(s.divergence.speed_ratio_max, 0.5) << name;
@@ -153,7 +153,7 @@ TEST(SceneLint, NoShippedSceneIsWarned) {
                            "deformable.toml", "endobag.toml", "mouse.toml", "admittance.toml"}) {
     Scene s;
     try {
-      s = shipped(name);
+      s = shipped_scene(name);
     } catch (const std::exception& e) {  // a part this build leaves out
       continue;
     }

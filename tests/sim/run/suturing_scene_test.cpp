@@ -27,6 +27,8 @@
 
 namespace {
 
+using numen::test::csv_column;
+
 constexpr double kThreshold = 1.0;  // N: the scene's puncture_force
 
 /// The shipped suturing scene run to its end, its text first passed through `edit`; with a
@@ -37,13 +39,6 @@ numen::sim::RunSummary run_suturing(const std::string& text, const std::string& 
   numen::sim::RunOptions options;
   options.trace_path = trace;
   return numen::sim::run_scene(scene, options);
-}
-
-/// The column `name` of a trace's header `names`, or fails.
-std::size_t column(const std::vector<std::string>& names, const std::string& name) {
-  const auto it = std::find(names.begin(), names.end(), name);
-  EXPECT_NE(it, names.end()) << name;
-  return static_cast<std::size_t>(it - names.begin());
 }
 
 void print_suturing_run(const char* what, const numen::sim::RunSummary& s) {
@@ -146,11 +141,14 @@ TEST(SuturingScene, BothPassesGoInAndOutAtTheirMarksAtTheThresholdWithoutATunnel
   const std::vector<std::string> lines = numen::test::read_lines(trace);
   ASSERT_GT(lines.size(), 2u);
   const std::vector<std::string> names = numen::test::split_csv(lines[0]);
-  const std::size_t time = column(names, "time_s"), tension = column(names, "thread_tension_n"),
-                    stretch = column(names, "thread_stretch"), unconverged = column(names, "thread_unconverged"),
-                    iterations = column(names, "thread_newton_iterations"),
-                    tip = column(names, "needle_tip_force_n"), points = column(names, "needle_points"),
-                    event = column(names, "needle_event");
+  const std::size_t time = csv_column(names, "time_s"),
+                    tension = csv_column(names, "thread_tension_n"),
+                    stretch = csv_column(names, "thread_stretch"),
+                    unconverged = csv_column(names, "thread_unconverged"),
+                    iterations = csv_column(names, "thread_newton_iterations"),
+                    tip = csv_column(names, "needle_tip_force_n"),
+                    points = csv_column(names, "needle_points"),
+                    event = csv_column(names, "needle_event");
   double tension_max = 0.0, tension_max_s = -1.0, stretch_max = 0.0, last_puncture_tip = -1.0;
   int punctures = 0, exits = 0, points_max = 0, iterations_max = 0;
   std::int64_t unconverged_steps = 0;

@@ -33,9 +33,10 @@ using numen::core::Vec3;
 using numen::sim::Trace;
 using numen::sim::TraceRecord;
 
-using numen::test::TempDir;
+using numen::test::csv_column;
 using numen::test::read_lines;
 using numen::test::split_csv;
+using numen::test::TempDir;
 
 TraceRecord record(int i) {
   TraceRecord r;
@@ -63,13 +64,6 @@ TraceRecord record(int i) {
   return r;
 }
 
-int column(const std::vector<std::string>& header, const std::string& name) {
-  for (std::size_t i = 0; i < header.size(); ++i)
-    if (header[i] == name) return static_cast<int>(i);
-  ADD_FAILURE() << "no column " << name;
-  return 0;
-}
-
 TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
   Trace trace;
   trace.reserve(4);
@@ -82,38 +76,35 @@ TEST(Trace, WriteCsvHasAHeaderAndOneRowPerRecord) {
   const std::vector<std::string> header = split_csv(lines[0]);
   EXPECT_EQ(header.front(), "time_s");
   EXPECT_EQ(header.back(), "needle_event");
-  EXPECT_EQ(column(header, "grasps_held") + 1, column(header, "thread_tension_n"));
-  EXPECT_EQ(column(header, "baumgarte_rhs_max") + 1, column(header, "solver_residual"));
-  EXPECT_EQ(column(header, "solver_iterations") + 1, column(header, "joint_drift_mm"));
+  EXPECT_EQ(csv_column(header, "grasps_held") + 1, csv_column(header, "thread_tension_n"));
+  EXPECT_EQ(csv_column(header, "baumgarte_rhs_max") + 1, csv_column(header, "solver_residual"));
+  EXPECT_EQ(csv_column(header, "solver_iterations") + 1, csv_column(header, "joint_drift_mm"));
   // One column per axis torque, as many as the records have.
-  EXPECT_EQ(column(header, "axis_torque_0") + 2, column(header, "axis_torque_2"));
+  EXPECT_EQ(csv_column(header, "axis_torque_0") + 2, csv_column(header, "axis_torque_2"));
   for (const auto& h : header) EXPECT_NE(h, "axis_torque_3");
   for (int i = 0; i < 4; ++i) {
     const std::vector<std::string> row = split_csv(lines[static_cast<std::size_t>(i) + 1]);
     ASSERT_EQ(row.size(), header.size()) << "row " << i;
     const TraceRecord r = record(i);
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "time_s"))]), r.time_s);
-    EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "attached_body"))]), r.held_body);
-    EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "sample_valid"))]), r.sample_valid ? 1 : 0);
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "target_x"))]), r.target.position.x());
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "tool_z"))]), r.tool.position.z());
-    EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "contacts"))]), r.contacts);
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "target_penetration_mm"))]),
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "time_s")]), r.time_s);
+    EXPECT_EQ(std::stoi(row[csv_column(header, "attached_body")]), r.held_body);
+    EXPECT_EQ(std::stoi(row[csv_column(header, "sample_valid")]), r.sample_valid ? 1 : 0);
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "target_x")]), r.target.position.x());
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "tool_z")]), r.tool.position.z());
+    EXPECT_EQ(std::stoi(row[csv_column(header, "contacts")]), r.contacts);
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "target_penetration_mm")]),
                      r.target_penetration_mm);
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "feedback_fz"))]), r.feedback.force.z());
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "axis_torque_1"))]), r.axis_torque[1]);
-    EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "solver_iterations"))]), r.solver_iterations);
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "feedback_fz")]), r.feedback.force.z());
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "axis_torque_1")]), r.axis_torque[1]);
+    EXPECT_EQ(std::stoi(row[csv_column(header, "solver_iterations")]), r.solver_iterations);
     // Deformable nets.
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "solver_residual"))]),
-                     r.solver_residual);
-    EXPECT_EQ(std::stoi(row[static_cast<std::size_t>(column(header, "node_contacts"))]),
-              r.node_contacts);
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "net_penetration_mm"))]),
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "solver_residual")]), r.solver_residual);
+    EXPECT_EQ(std::stoi(row[csv_column(header, "node_contacts")]), r.node_contacts);
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "net_penetration_mm")]),
                      r.net_penetration_mm);
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "net_tie_stretch_mm"))]),
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "net_tie_stretch_mm")]),
                      r.net_tie_stretch_mm);
-    EXPECT_DOUBLE_EQ(std::stod(row[static_cast<std::size_t>(column(header, "net_strain_max"))]),
-                     r.net_strain_max);
+    EXPECT_DOUBLE_EQ(std::stod(row[csv_column(header, "net_strain_max")]), r.net_strain_max);
   }
 }
 
@@ -275,8 +266,8 @@ TEST(Trace, RunSceneWritesOneRowPerStep) {
   const auto header = split_csv(lines[0]);
   // Per-axis columns are named by the scene's axes, the last followed by step_time_us.
   ASSERT_EQ(scene.device.axes.size(), 5u);
-  EXPECT_EQ(column(header, "axis_torque_" + scene.device.axes.back().name) + 1,
-            column(header, "step_time_us"));
+  EXPECT_EQ(csv_column(header, "axis_torque_" + scene.device.axes.back().name) + 1,
+            csv_column(header, "step_time_us"));
   const auto last = split_csv(lines.back());
   ASSERT_EQ(last.size(), header.size());
   EXPECT_NEAR(std::stod(last[0]), 0.25, 1e-9);

@@ -31,7 +31,7 @@ using numen::sim::signed_volume;
 using numen::test::TempDir;
 
 /// Loads `path` expecting an InputError; returns it.
-InputError load_error(const std::string& path) {
+InputError mesh_load_error(const std::string& path) {
   try {
     load_mesh_file(path);
   } catch (const InputError& e) {
@@ -77,7 +77,7 @@ TEST(ObjMesh, ADirectoryIsNamedAsSuch) {
   TempDir dir;
   const std::string folder = (dir / "meshes.obj").string();
   std::filesystem::create_directories(folder);
-  const InputError e = load_error(folder);
+  const InputError e = mesh_load_error(folder);
   EXPECT_EQ(std::string(e.what()), folder + ": is a directory, not a mesh file");
 }
 
@@ -138,7 +138,7 @@ TEST(ObjMesh, SeveralShapesShareTheVertexList) {
 TEST(ObjMesh, MissingFile) {
   TempDir dir;
   const std::string path = (dir / "nope.obj").string();
-  const InputError e = load_error(path);
+  const InputError e = mesh_load_error(path);
   EXPECT_EQ(e.file(), path);
   EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
 }
@@ -146,11 +146,11 @@ TEST(ObjMesh, MissingFile) {
 TEST(ObjMesh, NoFace) {
   TempDir dir;
   const std::string path = dir.write("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\n");
-  const InputError e = load_error(path);
+  const InputError e = mesh_load_error(path);
   const std::string what = e.what();
   EXPECT_NE(what.find(path), std::string::npos) << what;
   EXPECT_NE(what.find("no face"), std::string::npos) << what;
-  EXPECT_NE(std::string(load_error(dir.write("empty.obj", "")).what()).find("no face"),
+  EXPECT_NE(std::string(mesh_load_error(dir.write("empty.obj", "")).what()).find("no face"),
             std::string::npos);
 }
 
@@ -159,7 +159,7 @@ TEST(ObjMesh, NonManifoldEdge) {
   const std::string path = dir.write("fin.obj",
                                      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\n"
                                      "f 1 2 3\nf 2 1 4\nf 1 2 5\n");
-  const InputError e = load_error(path);
+  const InputError e = mesh_load_error(path);
   const std::string what = e.what();
   EXPECT_EQ(e.file(), path);
   EXPECT_NE(what.find(path), std::string::npos) << what;
@@ -170,7 +170,7 @@ TEST(ObjMesh, NonManifoldEdge) {
 TEST(ObjMesh, DegenerateFace) {
   TempDir dir;
   const std::string path = dir.write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
-  const std::string what = load_error(path).what();
+  const std::string what = mesh_load_error(path).what();
   EXPECT_NE(what.find(path), std::string::npos) << what;
   EXPECT_NE(what.find("degenerate"), std::string::npos) << what;
 }
@@ -182,7 +182,7 @@ TEST(ObjMesh, BadFaces) {
   for (const char* face : {"f 1 2 5\n", "f 1 2 3 7\n", "f 1 2 3\nf 2 4\n"}) {
     const std::string path =
         dir.write("range.obj", std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n") + face);
-    const std::string what = load_error(path).what();
+    const std::string what = mesh_load_error(path).what();
     EXPECT_NE(what.find(path), std::string::npos) << what;
   }
 }
@@ -191,7 +191,7 @@ TEST(ObjMesh, ParseErrorCarriesTheLine) {
   TempDir dir;
   // Index 0 does not exist in OBJ (1-based): the loader stops at line 4.
   const std::string path = dir.write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
-  const InputError e = load_error(path);
+  const InputError e = mesh_load_error(path);
   const std::string what = e.what();
   EXPECT_NE(what.find(path), std::string::npos) << what;
   EXPECT_EQ(e.line(), 4) << what;
@@ -207,14 +207,14 @@ TEST(ObjMesh, MalformedVertexCoordinatesAreRefusedAtTheirLine) {
   numen::test::TempDir dir;
   const std::string faces = "f 1 2 3\n";
   const std::string bad = dir.write("bad_v.obj", "v 0 0 0\nv 1 0 0\nv 0 1 abc\n" + faces);
-  const InputError e1 = load_error(bad);
+  const InputError e1 = mesh_load_error(bad);
   EXPECT_EQ(e1.line(), 3) << e1.what();
   EXPECT_NE(std::string(e1.what()).find("abc"), std::string::npos) << e1.what();
   const std::string short_v = dir.write("short_v.obj", "v 0 0 0\nv 1 0\nv 0 1 0\n" + faces);
-  const InputError e2 = load_error(short_v);
+  const InputError e2 = mesh_load_error(short_v);
   EXPECT_EQ(e2.line(), 2) << e2.what();
   const std::string inf_v = dir.write("inf_v.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\n" + faces);
-  EXPECT_EQ(load_error(inf_v).line(), 2);
+  EXPECT_EQ(mesh_load_error(inf_v).line(), 2);
   // Colours after the coordinates and comments are fine.
   EXPECT_EQ(numen::sim::load_mesh_file(dir.write(
                 "ok.obj", "v 0 0 0 1 0 0\nv 1 0 0 # corner\nv 0 1 0\n" + faces))
@@ -320,7 +320,7 @@ TEST(MeshFile, NonFiniteBinaryStlVertexIsRefused) {
   auto tris = tet_triangles();
   tris[3][2] = Vec3(0, 0, std::numeric_limits<double>::quiet_NaN());
   const std::string path = dir.write("nan.stl", binary_stl(tris));
-  const std::string what = load_error(path).what();
+  const std::string what = mesh_load_error(path).what();
   EXPECT_NE(what.find(path), std::string::npos) << what;
   EXPECT_NE(what.find("not finite"), std::string::npos) << what;
 }
@@ -343,7 +343,7 @@ TEST(MeshFile, TriangleBoundIsNamed) {
 TEST(MeshFile, UnparsableFileNamesAssimp) {
   TempDir dir;
   const std::string path = dir.write("junk.stl", "solid x\nfacet normal 0 0 1\n outer loop\n");
-  const std::string what = load_error(path).what();
+  const std::string what = mesh_load_error(path).what();
   EXPECT_NE(what.find(path), std::string::npos) << what;
 }
 
@@ -353,10 +353,10 @@ TEST(MeshFile, FormatsOtherThanTheCheckedOnesAreRefusedByName) {
   TempDir dir;
   const std::string off = dir.write("bomb.off", "OFF\n400000000 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n");
   EXPECT_EQ(
-      std::string(load_error(off).what()),
+      std::string(mesh_load_error(off).what()),
       off + ": a mesh file is .stl, .obj, .ply, .gltf or .glb: not \".off\" (docs/meshes.md)");
   const std::string bare = dir.write("mesh", kCube);
-  EXPECT_EQ(std::string(load_error(bare).what()),
+  EXPECT_EQ(std::string(mesh_load_error(bare).what()),
             bare +
                 ": a mesh file is .stl, .obj, .ply, .gltf or .glb: this one has no extension "
                 "(docs/meshes.md)");

@@ -154,7 +154,8 @@ end_time = 1.0
 Scene load_text(const TempDir& dir, const std::string& text) { return load_scene(dir.write("art.toml", text)); }
 
 /// what() names the file, the line, the key (if given) and contains `message`.
-void expect_located(const InputError& e, int line, const std::string& key, const std::string& message) {
+void expect_joint_error_located(const InputError& e, int line, const std::string& key,
+                                const std::string& message) {
   const std::string what = e.what();
   SCOPED_TRACE(what);
   EXPECT_NE(what.find("bad.toml"), std::string::npos) << "file name";
@@ -329,117 +330,122 @@ TEST(SceneArticulation, BaumgarteSettingsAreRead) {
 TEST(SceneArticulationErrors, UnknownJointType) {
   TempDir dir;
   const std::string t = replace(art_scene(), "type = \"cylindrical\"", "type = \"hinge\"");
-  expect_located(load_error(dir, t), line_of(t, "type = \"hinge\""), "joint[1].type", "\"hinge\"");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "type = \"hinge\""), "joint[1].type",
+                             "\"hinge\"");
 }
 
 TEST(SceneArticulationErrors, UnknownParentBody) {
   TempDir dir;
   const std::string t = replace(art_scene(), "parent = \"sleeve\"", "parent = \"shaft\"");
-  expect_located(load_error(dir, t), line_of(t, "parent = \"shaft\""), "joint[1].parent",
-                 "no body named \"shaft\"");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "parent = \"shaft\""),
+                             "joint[1].parent", "no body named \"shaft\"");
 }
 
 TEST(SceneArticulationErrors, UnknownChildBody) {
   TempDir dir;
   const std::string t = replace(art_scene(), "child = \"tube\"", "child = \"tubes\"");
-  expect_located(load_error(dir, t), line_of(t, "child = \"tubes\""), "joint[1].child",
-                 "no body named \"tubes\"");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "child = \"tubes\""), "joint[1].child",
+                             "no body named \"tubes\"");
 }
 
 TEST(SceneArticulationErrors, WorldIsNotAChild) {
   TempDir dir;
   const std::string t = replace(art_scene(), "child = \"tube\"", "child = \"world\"");
-  expect_located(load_error(dir, t), line_of(t, "child = \"world\""), "joint[1].child",
-                 "no body named \"world\"");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "child = \"world\""), "joint[1].child",
+                             "no body named \"world\"");
 }
 
 TEST(SceneArticulationErrors, ChildEqualsParent) {
   TempDir dir;
   const std::string t = replace(art_scene(), "child = \"tube\"", "child = \"sleeve\"");
-  expect_located(load_error(dir, t), line_of(t, "child = \"sleeve\"", 2), "joint[1].child",
-                 "two different bodies");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "child = \"sleeve\"", 2),
+                             "joint[1].child", "two different bodies");
 }
 
 TEST(SceneArticulationErrors, TrocarParentFrameNeedsTheWorldAsParent) {
   TempDir dir;
   const std::string t =
       replace(art_scene(), "parent = \"sleeve\"\n", "parent = \"sleeve\"\nparent_frame = \"trocar\"\n");
-  expect_located(load_error(dir, t), line_of(t, "parent_frame = \"trocar\"", 2), "joint[1].parent_frame",
-                 "trocar");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "parent_frame = \"trocar\"", 2),
+                             "joint[1].parent_frame", "trocar");
 }
 
 TEST(SceneArticulationErrors, ParentFrameStringOtherThanTrocar) {
   TempDir dir;
   const std::string t = replace(art_scene(), "parent_frame = \"trocar\"", "parent_frame = \"sleeve\"");
-  expect_located(load_error(dir, t), line_of(t, "parent_frame = \"sleeve\""), "joint[0].parent_frame",
-                 "\"trocar\"");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "parent_frame = \"sleeve\""),
+                             "joint[0].parent_frame", "\"trocar\"");
 }
 
 TEST(SceneArticulationErrors, PrescribedSphericalJoint) {
   TempDir dir;
   const std::string t =
       replace(art_scene(), "child = \"sleeve\"\n", "child = \"sleeve\"\nprescribed = { axis = \"jaw\" }\n");
-  expect_located(load_error(dir, t), line_of(t, "prescribed = { axis = \"jaw\" }"), "joint[0].prescribed",
-                 "only revolute and prismatic");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "prescribed = { axis = \"jaw\" }"),
+                             "joint[0].prescribed", "only revolute and prismatic");
 }
 
 TEST(SceneArticulationErrors, PrescribedAxisThatDoesNotExist) {
   TempDir dir;
   const std::string t = replace(art_scene(), "axis = \"jaw\", scale = 0.5", "axis = \"grip\", scale = 0.5");
   const InputError e = load_error(dir, t);
-  expect_located(e, line_of(t, "axis = \"grip\""), "joint[2].prescribed.axis", "no axis \"grip\"");
+  expect_joint_error_located(e, line_of(t, "axis = \"grip\""), "joint[2].prescribed.axis",
+                             "no axis \"grip\"");
   EXPECT_NE(e.message().find("pivot_x, pivot_y, depth, roll, jaw"), std::string::npos) << e.message();
 }
 
 TEST(SceneArticulationErrors, UnknownKeyInPrescribed) {
   TempDir dir;
   const std::string t = replace(art_scene(), "axis = \"jaw\", scale = 0.5", "axis = \"jaw\", gain = 0.5");
-  expect_located(load_error(dir, t), line_of(t, "gain = 0.5"), "joint[2].prescribed.gain", "unknown key");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "gain = 0.5"),
+                             "joint[2].prescribed.gain", "unknown key");
 }
 
 TEST(SceneArticulationErrors, UnknownLinkListsTheDevicesLinks) {
   TempDir dir;
   const std::string t = replace(art_scene(), "link = \"jaw_1\"", "link = \"jaw_3\"");
   const InputError e = load_error(dir, t);
-  expect_located(e, line_of(t, "link = \"jaw_3\""), "body[2].link", "no link \"jaw_3\"");
+  expect_joint_error_located(e, line_of(t, "link = \"jaw_3\""), "body[2].link",
+                             "no link \"jaw_3\"");
   EXPECT_NE(e.message().find("tool, trocar, tube, jaw_1, jaw_2"), std::string::npos) << e.message();
 }
 
 TEST(SceneArticulationErrors, LinkOffsetWithoutLink) {
   TempDir dir;
   const std::string t = replace(art_scene(), "link = \"jaw_2\"\n", "");
-  expect_located(load_error(dir, t), line_of(t, "link_offset = { position = [0.0, 0.0, 0.006] }"),
-                 "body[3].link_offset", "link");
+  expect_joint_error_located(load_error(dir, t),
+                             line_of(t, "link_offset = { position = [0.0, 0.0, 0.006] }"),
+                             "body[3].link_offset", "link");
 }
 
 TEST(SceneArticulationErrors, FrameWithBothAxisAndOrientation) {
   TempDir dir;
   const std::string t = replace(art_scene(), "axis = [1.0, 0.0, 0.0] }",
                                 "axis = [1.0, 0.0, 0.0], orientation = [1.0, 0.0, 0.0, 0.0] }");
-  expect_located(load_error(dir, t), line_of(t, "orientation = [1.0, 0.0, 0.0, 0.0] }"),
-                 "joint[2].parent_frame.axis", "either orientation or axis");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "orientation = [1.0, 0.0, 0.0, 0.0] }"),
+                             "joint[2].parent_frame.axis", "either orientation or axis");
 }
 
 TEST(SceneArticulationErrors, LinkOffsetWithBothAxisAndOrientation) {
   TempDir dir;
   const std::string t = replace(art_scene(), "link_offset = { position = [0.0, 0.0, 0.006] }",
                                 "link_offset = { axis = [1.0, 0.0, 0.0], orientation = [1.0, 0.0, 0.0, 0.0] }");
-  expect_located(load_error(dir, t), line_of(t, "link_offset = { axis"), "body[3].link_offset.axis",
-                 "either orientation or axis");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "link_offset = { axis"),
+                             "body[3].link_offset.axis", "either orientation or axis");
 }
 
 TEST(SceneArticulationErrors, ZeroAxis) {
   TempDir dir;
   const std::string t = replace(art_scene(), "axis = [0.0, 3.0, 4.0]", "axis = [0.0, 0.0, 0.0]");
-  expect_located(load_error(dir, t), line_of(t, "axis = [0.0, 0.0, 0.0]"), "joint[2].child_frame.axis",
-                 "non-zero");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "axis = [0.0, 0.0, 0.0]"),
+                             "joint[2].child_frame.axis", "non-zero");
 }
 
 TEST(SceneArticulationErrors, DuplicateJointName) {
   TempDir dir;
   const std::string t = replace(art_scene(), "name = \"jaw_2_hinge\"", "name = \"jaw_1_hinge\"");
-  expect_located(load_error(dir, t), line_of(t, "name = \"jaw_1_hinge\"", 2), "joint[3].name",
-                 "declared twice");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "name = \"jaw_1_hinge\"", 2),
+                             "joint[3].name", "declared twice");
 }
 
 TEST(SceneArticulationErrors, BodyThatIsTheChildOfTwoJoints) {
@@ -464,22 +470,25 @@ TEST(SceneArticulationErrors, BodyThatIsTheChildOfTwoJoints) {
 TEST(SceneArticulationErrors, BaumgarteBothZeroIsRejected) {
   TempDir dir;
   const std::string t = art_scene() + "\n[baumgarte]\nalpha_dt = 0.0\nbeta_dt2 = 0.0\n";
-  expect_located(load_error(dir, t), line_of(t, "beta_dt2 = 0.0"), "baumgarte.beta_dt2",
-                 "cannot both be 0");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "beta_dt2 = 0.0"), "baumgarte.beta_dt2",
+                             "cannot both be 0");
 }
 
 TEST(SceneArticulationErrors, BaumgarteNegativeAndUnknownKey) {
   TempDir dir;
   std::string t = art_scene() + "\n[baumgarte]\nalpha_dt = -1.0\n";
-  expect_located(load_error(dir, t), line_of(t, "alpha_dt = -1.0"), "baumgarte.alpha_dt", "");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "alpha_dt = -1.0"),
+                             "baumgarte.alpha_dt", "");
   t = art_scene() + "\n[baumgarte]\nalpha = 1.0\n";
-  expect_located(load_error(dir, t), line_of(t, "alpha = 1.0"), "baumgarte.alpha", "unknown key");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "alpha = 1.0"), "baumgarte.alpha",
+                             "unknown key");
 }
 
 TEST(SceneArticulationErrors, UnknownKeyInJoint) {
   TempDir dir;
   const std::string t = replace(art_scene(), "parent = \"sleeve\"\n", "parent = \"sleeve\"\nstiffness = 1.0\n");
-  expect_located(load_error(dir, t), line_of(t, "stiffness = 1.0"), "joint[1].stiffness", "unknown key");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "stiffness = 1.0"),
+                             "joint[1].stiffness", "unknown key");
 }
 
 TEST(SceneArticulationErrors, JointWithoutChild) {
@@ -499,8 +508,8 @@ TEST(SceneArticulationErrors, LinkedBodyWithOrientationButNoPosition) {
   TempDir dir;
   const std::string t =
       replace(art_scene(), "link = \"jaw_1\"", "link = \"jaw_1\"\norientation = [1.0, 0.0, 0.0, 0.0]");
-  expect_located(load_error(dir, t), line_of(t, "orientation = [1.0, 0.0, 0.0, 0.0]"),
-                 "body[2].orientation", "give both position and orientation");
+  expect_joint_error_located(load_error(dir, t), line_of(t, "orientation = [1.0, 0.0, 0.0, 0.0]"),
+                             "body[2].orientation", "give both position and orientation");
 }
 
 }  // namespace

@@ -27,7 +27,8 @@ std::string construction_with(const std::string& table) {
                  "coupling = \"god-object\"\n\n" + table + "\n");
 }
 
-InputError load_error(TempDir& dir, const std::string& text, const char* file = "mr.toml") {
+InputError multirate_load_error(TempDir& dir, const std::string& text,
+                                const char* file = "mr.toml") {
   try {
     numen::sim::load_scene(dir.write(file, text));
   } catch (const InputError& e) {
@@ -69,31 +70,35 @@ TEST(SceneMultirate, SceneDtAndMarginGiveTheRatioAndEveryHeldBodyIsATool) {
 TEST(SceneMultirate, BadValuesAreLocatedErrors) {
   TempDir dir;
   const std::string not_multiple = construction_with("[multirate]\nscene_dt = 0.0025\nmargin = 0.01");
-  const InputError e1 = load_error(dir, not_multiple);
+  const InputError e1 = multirate_load_error(dir, not_multiple);
   EXPECT_EQ(e1.key(), "multirate.scene_dt");
   EXPECT_EQ(e1.line(), numen::test::line_of(not_multiple, "scene_dt = 0.0025"));
   EXPECT_NE(std::string(e1.what()).find("whole multiple of dt"), std::string::npos) << e1.what();
   // 1e-10 s off a multiple: the message quotes every digit (it read "got 0.001 s, 1 dt").
   const std::string near = construction_with("[multirate]\nscene_dt = 0.0010000001\nmargin = 0.01");
-  const InputError e_near = load_error(dir, near);
+  const InputError e_near = multirate_load_error(dir, near);
   EXPECT_EQ(e_near.key(), "multirate.scene_dt");
   EXPECT_EQ(e_near.line(), numen::test::line_of(near, "scene_dt = 0.0010000001"));
   EXPECT_EQ(e_near.message(),
             "must be a whole multiple of dt = 0.001 s (got 0.0010000001 s, 1.0000001 dt)");
-  const InputError e2 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.0005\nmargin = 0.01"));
+  const InputError e2 =
+      multirate_load_error(dir, construction_with("[multirate]\nscene_dt = 0.0005\nmargin = 0.01"));
   EXPECT_EQ(e2.key(), "multirate.scene_dt") << "shorter than dt";
-  const InputError e3 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01"));
+  const InputError e3 =
+      multirate_load_error(dir, construction_with("[multirate]\nscene_dt = 0.01"));
   EXPECT_EQ(e3.key(), "multirate.margin");
   EXPECT_NE(std::string(e3.what()).find("missing"), std::string::npos) << e3.what();
-  const InputError e4 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargin = -0.001"));
+  const InputError e4 =
+      multirate_load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargin = -0.001"));
   EXPECT_EQ(e4.key(), "multirate.margin");
   const std::string no_fold =
       construction_with("[multirate]\nscene_dt = 0.01\nmargin = 0.01\nfold_step = 0");
-  const InputError e6 = load_error(dir, no_fold);
+  const InputError e6 = multirate_load_error(dir, no_fold);
   EXPECT_EQ(e6.key(), "multirate.fold_step");
   EXPECT_EQ(e6.line(), numen::test::line_of(no_fold, "fold_step = 0"));
   EXPECT_EQ(e6.message(), "must be in [1e-06, 10], got 0");
-  const InputError e5 = load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargn = 0.01"));
+  const InputError e5 =
+      multirate_load_error(dir, construction_with("[multirate]\nscene_dt = 0.01\nmargn = 0.01"));
   EXPECT_NE(std::string(e5.what()).find("margn"), std::string::npos) << "a typo is refused: " << e5.what();
 }
 
@@ -102,7 +107,7 @@ TEST(SceneMultirate, WhatTheMultirateGodObjectCannotRunIsRefusedAtTheTable) {
   // An integrator without an effective contact force (the impulse hand-back needs it).
   const std::string trbdf2 = replace(construction_with("[multirate]\nscene_dt = 0.01\nmargin = 0.01"),
                                      "integrator = \"implicit-euler\"", "integrator = \"tr-bdf2\"");
-  const InputError e1 = load_error(dir, trbdf2);
+  const InputError e1 = multirate_load_error(dir, trbdf2);
   EXPECT_EQ(e1.key(), "multirate.scene_dt");
   EXPECT_NE(std::string(e1.what()).find("integrator"), std::string::npos) << e1.what();
   // A net off its rigid component's centre of mass (the device loop lumps the net onto the
@@ -113,7 +118,7 @@ TEST(SceneMultirate, WhatTheMultirateGodObjectCannotRunIsRefusedAtTheTable) {
     const std::string data = std::string("\"") + NUMEN_SOURCE_DIR + "/sim/data/";
     const std::string off = replace(replace(text, "\"../data/", data), "position = [0.0, 0.0, 0.0]     # mesh centre",
                                     "position = [0.0, 0.0, 0.005]   # mesh centre");
-    const InputError e2 = load_error(dir, off, "deformable_mr.toml");
+    const InputError e2 = multirate_load_error(dir, off, "deformable_mr.toml");
     EXPECT_EQ(e2.key(), "multirate.scene_dt");
     EXPECT_NE(std::string(e2.what()).find("net 'probe' has its centre of mass"), std::string::npos) << e2.what();
   }
@@ -171,7 +176,7 @@ TEST(SceneMultirate, ANetOnABodyNoGodObjectHoldsIsRefused) {
   text = replace(text, "[[deformable]]\nname = \"probe\"\nbody = \"core\"",
                  "[[body]]\nname = \"spare\"\nmass = 0.05\ninertia = [1.0e-5, 1.0e-5, 1.0e-5]\n"
                  "material = \"steel\"\n\n[[deformable]]\nname = \"probe\"\nbody = \"spare\"");
-  const InputError e = load_error(dir, text, "spare_net_mr.toml");
+  const InputError e = multirate_load_error(dir, text, "spare_net_mr.toml");
   EXPECT_EQ(e.key(), "multirate.scene_dt");
   EXPECT_NE(std::string(e.what()).find("net 'probe' is on body 'spare', which is in no body's god-object"),
             std::string::npos) << e.what();
@@ -227,13 +232,15 @@ TEST(SceneMultirate, SeveralDevicesRefuseAReleaseOfTheHeldBody) {
   NUMEN_REQUIRE_DEFORMABLE();
   NUMEN_REQUIRE_ARTICULATION();
   TempDir dir;
-  const InputError release = load_error(
-      dir, bimanual_multirate_text("\n[multirate]", "\n[[event]]\ntime = 1.0\nattach = \"none\"\n\n[multirate]"),
+  const InputError release = multirate_load_error(
+      dir,
+      bimanual_multirate_text("\n[multirate]",
+                              "\n[[event]]\ntime = 1.0\nattach = \"none\"\n\n[multirate]"),
       "release.toml");
   EXPECT_EQ(release.key(), "event[0].attach") << release.what();
   EXPECT_NE(std::string(release.what()).find("holds a body throughout"), std::string::npos) << release.what();
-  const InputError unheld =
-      load_error(dir, bimanual_multirate_text("attach = \"tube_l\"\n", ""), "unheld.toml");
+  const InputError unheld = multirate_load_error(
+      dir, bimanual_multirate_text("attach = \"tube_l\"\n", ""), "unheld.toml");
   EXPECT_EQ(unheld.key(), "multirate.scene_dt") << unheld.what();
   EXPECT_NE(std::string(unheld.what()).find("holding a body from the start"), std::string::npos) << unheld.what();
 }

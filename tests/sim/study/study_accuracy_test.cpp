@@ -23,7 +23,7 @@ namespace {
 using numen::sim::AccuracyOptions;
 using numen::sim::AccuracyResult;
 
-std::vector<std::string> read_lines(const std::string& path) {
+std::vector<std::string> read_csv_lines(const std::string& path) {
   std::ifstream f(path);
   std::vector<std::string> lines;
   for (std::string l; std::getline(f, l);) lines.push_back(l);
@@ -93,7 +93,7 @@ TEST(StudyAccuracy, CsvFilesHaveTheDocumentedColumns) {
   numen::test::TempDir dir;
   const std::string out = (dir.path() / "acc").string();
   numen::sim::write_accuracy_csv(free_body_result(), out);
-  const auto rows = read_lines(out + "/accuracy.csv");
+  const auto rows = read_csv_lines(out + "/accuracy.csv");
   ASSERT_EQ(rows.size(), 21u);
   EXPECT_EQ(rows[0],
             "case,integrator,dt_s,steps,horizon_s,position_error_max_mm,position_error_rms_mm,"
@@ -101,13 +101,13 @@ TEST(StudyAccuracy, CsvFilesHaveTheDocumentedColumns) {
             "nonfinite_steps,reference");
   for (const auto& l : rows) EXPECT_EQ(count_fields(l), 13u) << l;
   EXPECT_EQ(rows[1].rfind("free-body,implicit-euler,0.002,250,0.5,", 0), 0u) << rows[1];
-  const auto orders = read_lines(out + "/accuracy_orders.csv");
+  const auto orders = read_csv_lines(out + "/accuracy_orders.csv");
   ASSERT_EQ(orders.size(), 5u);
   EXPECT_EQ(orders[0],
             "case,integrator,observed_order,observed_order_rotation,theoretical_order,points,"
             "fit_dt_min_s,fit_dt_max_s,position_error_max_at_1ms_mm,cpu_s_per_sim_s_at_1ms");
   for (const auto& l : orders) EXPECT_EQ(count_fields(l), 10u) << l;
-  const auto refs = read_lines(out + "/accuracy_references.csv");
+  const auto refs = read_csv_lines(out + "/accuracy_references.csv");
   ASSERT_EQ(refs.size(), 1u);
   EXPECT_EQ(refs[0],
             "case,reference_dt_s,half_dt_s,position_difference_max_mm,"
