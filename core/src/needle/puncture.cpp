@@ -1,19 +1,18 @@
 /// @file puncture.cpp
 /// The needle through tissue: its puncture test, its ties and its sweep (needle_puncture.hpp).
 
-#include "numen/core/needle_puncture.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
+#include "contact/collision_query.hpp"
+#include "net/net_terms.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/needle.hpp"
+#include "numen/core/needle_puncture.hpp"
 #include "numen/core/step_stages.hpp"
-
-#include "contact/collision_query.hpp"
-#include "net/net_terms.hpp"
+#include "scratch/data_scratch.hpp"
 
 namespace numen::core {
 namespace {
@@ -255,6 +254,33 @@ void drop_inside_contacts(const Model& model, Data& data, const NeedleModel& n, 
   data.num_node_contacts -= static_cast<int>((first + total) - last);
 }
 
+/// The tissue giving way at the threshold within the puncture's step (find_punctures()): each
+/// contact of the tip (`at_tip`, of the first `nc`) scaled by F_p / F_tip when the tip's force
+/// along the needle F_tip = NeedleState::tip_force passed F_p = NeedleModel::puncture_force — the
+/// excess taken back from its node's force and its reaction on the needle (compute_net_forces()
+/// added both), its Jacobian coefficients scaled alike — and tip_force set to F_p.
+template <class AtTip>
+void give_way_at_threshold(Data& data, const NeedleModel& n, NeedleState& st, const AtTip& at_tip,
+                           int nc) noexcept {
+  if (!(st.tip_force > n.puncture_force)) return;
+  const double a = n.puncture_force / st.tip_force;
+  NetScratch& s = data.scratch->net;
+  for (int c = 0; c < nc; ++c) {
+    NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!at_tip(ct)) continue;
+    const Vec3 excess = (1.0 - a) * ct.force;
+    s.force[static_cast<std::size_t>(ct.node)] -= excess;
+    Wrench& w = data.body_wrench[static_cast<std::size_t>(ct.body_b)];
+    w.force += excess;
+    w.torque += ct.r_b.cross(excess);
+    ct.force *= a;
+    ct.stiffness *= a;
+    ct.damping *= a;
+    ct.friction *= a;
+  }
+  st.tip_force = n.puncture_force;
+}
+
 }  // namespace
 
 void tie_needles(const Model& model, Data& data) noexcept {
@@ -335,6 +361,8 @@ void find_punctures(const Model& model, Data& data) noexcept {
     p.friction = n.friction;
     st.num_punctures = 1;
     st.event = PunctureEvent::kPuncture;
+    st.puncture_contact_force = st.tip_force;
+    give_way_at_threshold(data, n, st, at_tip, nc);
     st.puncture_tip_force = st.tip_force;
     st.puncture_time = data.time;
     ++st.punctures_made;

@@ -118,6 +118,7 @@ void accumulate_needle_figures(const core::Model& model, const core::Data& data,
     r.tunnels = n.tunnels;
     r.tunnels_stopped = n.tunnels_stopped;
     r.puncture_tip_force_n = n.puncture_tip_force;
+    r.puncture_contact_force_n = n.puncture_contact_force;
     r.deviation_max_mm = std::max(r.deviation_max_mm, n.max_deviation * 1e3);
   }
 }
@@ -139,6 +140,7 @@ void summarize_needles(RunSummary& s) {
       // The run's last puncture: the needle whose first entry came last.
       last_puncture_s = first_entry_s;
       s.needle_puncture_tip_force_n = r.puncture_tip_force_n;
+      s.needle_puncture_contact_force_n = r.puncture_contact_force_n;
       s.needle_puncture_force_n = r.puncture_force_n;
     }
     s.needle_deviation_max_mm = std::max(s.needle_deviation_max_mm, r.deviation_max_mm);
@@ -173,7 +175,8 @@ void summarize_needles(RunSummary& s) {
     if (r.passes_lost > 0) os << " (" << r.passes_lost << " more entries not recorded)";
     if (r.punctures > 0)
       os << "; tip force at the last puncture " << r.puncture_tip_force_n << " N (threshold "
-         << r.puncture_force_n << " N); deviation from the arc max " << r.deviation_max_mm << " mm";
+         << r.puncture_force_n << " N; its contacts asked " << r.puncture_contact_force_n
+         << " N); deviation from the arc max " << r.deviation_max_mm << " mm";
     const auto mark = [&os](const char* what, bool has, double at_s, const std::array<double, 3>& p,
                             const std::array<double, 3>& m, double& largest) {
       if (!has) return;

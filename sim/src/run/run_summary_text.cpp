@@ -64,7 +64,8 @@ constexpr RunSummarySegment kLayout[] = {
      set("needle.lines")},
     {" ({needle.tunnels_stopped} steps held back at the surface)", set("needle.tunnels_stopped")},
     {"; {needle.passes} through; tip force at the last puncture "
-     "{needle.puncture_tip_force_n} N (threshold {needle.puncture_force_n} N); deviation from the "
+     "{needle.puncture_tip_force_n} N (threshold {needle.puncture_force_n} N; its contacts asked "
+     "{needle.puncture_contact_force_n} N); deviation from the "
      "arc max {needle.deviation_max_mm} mm; force on the tissue max {needle.tissue_force_max_n} N at "
      "{needle.tissue_force_max_s} s",
      set("needle.lines")},

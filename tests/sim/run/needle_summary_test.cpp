@@ -70,7 +70,8 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
     n.punctures[0].net = 0;
     n.punctures[0].face = 0;
     n.punctures[0].weights = Vec3(1.0, 0.0, 0.0);
-    n.puncture_tip_force = 1.03;
+    n.puncture_tip_force = 1.0;
+    n.puncture_contact_force = 1.03;
     numen::sim::accumulate_needle_figures(m, d, s);
     d.time = 0.75;  // the exit at node 1; the entry's point 0.3 mm off the arc
     n.exits = 1;
@@ -99,7 +100,8 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
   EXPECT_EQ(s.needle_tunnels, 1);
   EXPECT_EQ(s.needle_tunnels_stopped, 3);
   EXPECT_EQ(s.needle_passes, 1);
-  EXPECT_DOUBLE_EQ(s.needle_puncture_tip_force_n, 1.03);
+  EXPECT_DOUBLE_EQ(s.needle_puncture_tip_force_n, 1.0);
+  EXPECT_DOUBLE_EQ(s.needle_puncture_contact_force_n, 1.03);
   EXPECT_DOUBLE_EQ(s.needle_puncture_force_n, 1.0);
   EXPECT_DOUBLE_EQ(s.needle_deviation_max_mm, 0.3);
   EXPECT_TRUE(s.needle_marks);
@@ -108,7 +110,7 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
   ASSERT_EQ(s.needle_lines.size(), 1u);
   EXPECT_EQ(s.needle_lines[0],
             "sh: 1 puncture, 1 exit, 1 release, 1 tunnel; through (in at 0.500 s, out at 0.750 s); tip force "
-            "at the last puncture 1.030 N (threshold 1.000 N); deviation from the arc max 0.300 mm; entry "
+            "at the last puncture 1.000 N (threshold 1.000 N; its contacts asked 1.030 N); deviation from the arc max 0.300 mm; entry "
             "1.000 mm from its mark; exit 2.000 mm from its mark");
   ASSERT_EQ(s.warnings.size(), warnings + 1);
   EXPECT_NE(s.warnings.back().find("needle 'sh' went into tissue without puncturing it 1 time, the first at 1.000 s"),
@@ -125,7 +127,7 @@ TEST(NeedleSummary, CountsThePassItsErrorsFromTheMarksAndATunnelIsAWarningAndAFa
   EXPECT_NEAR(j["needle"]["entry_error_mm"].get<double>(), 1.0, 1e-9);
   const std::string text = numen::sim::format_summary(s);
   EXPECT_NE(text.find("  needles: 1 punctures, 1 exits, 1 releases, 1 tunnels (3 steps held back at the surface); "
-                      "1 through; tip force at the last puncture 1.030 N (threshold 1.000 N); deviation from the arc max 0.300 mm; force on "
+                      "1 through; tip force at the last puncture 1.000 N (threshold 1.000 N; its contacts asked 1.030 N); deviation from the arc max 0.300 mm; force on "
                       "the tissue max 0.000 N at -1.000 s; from the marks: entry 1.000 mm, exit 2.000 mm\n  "
                       "needle sh: "),
             std::string::npos)
@@ -186,7 +188,7 @@ TEST(NeedleSummary, EachPassIsMeasuredAgainstItsOwnMarks) {
   ASSERT_EQ(s.needle_lines.size(), 1u);
   EXPECT_EQ(s.needle_lines[0],
             "sh: 3 punctures, 2 exits, 3 releases, 0 tunnels; 2 of 3 passes through; tip force at the last "
-            "puncture 0.000 N (threshold 1.000 N); deviation from the arc max 0.000 mm; pass 1: through (in "
+            "puncture 0.000 N (threshold 1.000 N; its contacts asked 0.000 N); deviation from the arc max 0.000 mm; pass 1: through (in "
             "at 0.700 s, out at 0.900 s), entry 1.000 mm from its mark, exit 2.000 mm from its mark; pass 2: "
             "through (in at 2.000 s, out at 2.500 s), entry 0.500 mm from its mark, exit 1.500 mm from its "
             "mark; pass 3: never in, exit mark missed (none)");

@@ -65,7 +65,7 @@ TEST(RunSummaryText, PrintsTheValuesInTheirFormats) {
            "hand–handle separation max 29.500 mm; port energy 0.080 J, min -0.013 J at 0.125 s\n",
            "  device: limit cycle at 0.375 s: 1.875 mm at 15.000 Hz\n",
            "  needles: 1 punctures, 1 exits, 2 releases, 1 tunnels (2 steps held back at the surface); 1 through; "
-           "tip force at the last puncture 1.125 N (threshold 1.000 N); deviation from the arc max 0.375 mm; force on the tissue "
+           "tip force at the last puncture 1.000 N (threshold 1.000 N; its contacts asked 1.125 N); deviation from the arc max 0.375 mm; force on the tissue "
            "max 0.625 N at 2.500 s; from the marks: entry "
            "0.250 mm, exit 0.500 mm\n  needle needle: 1 puncture, 1 exit, 2 releases, 1 tunnel; through",
            "  grasps: 2 started, 1 released, 1 slipped\n  grasp event: 6.968 s grasp grasper: organ "

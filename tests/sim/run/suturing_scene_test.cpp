@@ -42,14 +42,16 @@ numen::sim::RunSummary run_suturing(const std::string& text, const std::string& 
 }
 
 void print_suturing_run(const char* what, const numen::sim::RunSummary& s) {
-  std::printf("%s: %lld punctures, %lld exits, %lld releases, %lld tunnels, %lld through; tip force at the "
-              "puncture %.4f N; deviation max %.3f mm; entry %.3f mm, exit %.3f mm from the marks; thread "
-              "tension max %.3f N; grasps %lld\n",
-              what, static_cast<long long>(s.needle_punctures), static_cast<long long>(s.needle_exits),
-              static_cast<long long>(s.needle_releases), static_cast<long long>(s.needle_tunnels),
-              static_cast<long long>(s.needle_passes), s.needle_puncture_tip_force_n, s.needle_deviation_max_mm,
-              s.needle_entry_error_mm, s.needle_exit_error_mm, s.thread_tension_max_n,
-              static_cast<long long>(s.grasps_started));
+  std::printf(
+      "%s: %lld punctures, %lld exits, %lld releases, %lld tunnels, %lld through; tip force at the "
+      "puncture %.4f N (its contacts asked %.4f N); deviation max %.3f mm; entry %.3f mm, exit "
+      "%.3f mm from the marks; thread "
+      "tension max %.3f N; grasps %lld\n",
+      what, static_cast<long long>(s.needle_punctures), static_cast<long long>(s.needle_exits),
+      static_cast<long long>(s.needle_releases), static_cast<long long>(s.needle_tunnels),
+      static_cast<long long>(s.needle_passes), s.needle_puncture_tip_force_n,
+      s.needle_puncture_contact_force_n, s.needle_deviation_max_mm, s.needle_entry_error_mm,
+      s.needle_exit_error_mm, s.thread_tension_max_n, static_cast<long long>(s.grasps_started));
   for (const std::string& line : s.needle_lines) std::printf("  %s\n", line.c_str());
 }
 
@@ -126,8 +128,12 @@ TEST(SuturingScene, BothPassesGoInAndOutAtTheirMarksAtTheThresholdWithoutATunnel
   EXPECT_LT(s.needle_entry_error_mm, 1.0) << "mm from the entry marks (the larger of the two passes')";
   EXPECT_GE(s.needle_exit_error_mm, 0.0);
   EXPECT_LT(s.needle_exit_error_mm, 1.0) << "mm from the exit marks";
-  EXPECT_GE(s.needle_puncture_tip_force_n, kThreshold);
-  EXPECT_LT(s.needle_puncture_tip_force_n, 1.1 * kThreshold) << "N: within 10 % of the threshold";
+  // The tip's contacts reach the threshold within 10 % in the puncture's step; the tissue gives way
+  // at it there (core::find_punctures()).
+  EXPECT_GE(s.needle_puncture_contact_force_n, kThreshold);
+  EXPECT_LT(s.needle_puncture_contact_force_n, 1.1 * kThreshold)
+      << "N: within 10 % of the threshold";
+  EXPECT_DOUBLE_EQ(s.needle_puncture_tip_force_n, kThreshold);
   EXPECT_DOUBLE_EQ(s.needle_puncture_force_n, kThreshold);
   EXPECT_GT(s.thread_tension_max_n, 0.0);
   EXPECT_EQ(s.thread_breaks, 0);

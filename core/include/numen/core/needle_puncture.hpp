@@ -68,7 +68,13 @@ struct NeedleState {
   /// −F · t (N; > 0 when the tissue resists the tip going forward), as compute_net_forces() found
   /// them (the forces at the step's start).
   double tip_force = 0.0;
-  double puncture_tip_force = 0.0; ///< tip_force in the step of the last puncture (N).
+  /// tip_force in the step of the last puncture (N): the force the tissue carried there, at most
+  /// NeedleModel::puncture_force (find_punctures() scales the tip's contacts down to it).
+  double puncture_tip_force = 0.0;
+  /// The tip's contacts' force along the needle in the step of the last puncture as they were
+  /// found, before the tissue gave way at the threshold (N; ≥ puncture_tip_force): how far one
+  /// step's contact onset carried it past the threshold.
+  double puncture_contact_force = 0.0;
   double puncture_time = 0.0;      ///< Simulated time of the last puncture (s).
   double max_deviation = 0.0;      ///< Largest NeedlePuncture::deviation this step (m).
   /// Where the tip was last swept to (m, world): the next sweep's start. The tip at the last
@@ -107,7 +113,13 @@ void tie_needles(const Model& model, Data& data) noexcept;
 /// force and no passage yet, the force of its tip's contacts with a net (its spheres within 2 r_w
 /// of the tip) along its tangent; a puncture when it reaches NeedleModel::puncture_force and the
 /// tangent is within NeedleModel::puncture_max_angle of the contacts' inward normal: the entry
-/// point at its deepest triangle contact, tied from the next step. No allocation.
+/// point at its deepest triangle contact, tied from the next step. The tissue gives way at the
+/// threshold within the puncture's step: where the step's contacts carry more (a contact's onset
+/// of 0.01 mm at the tip adds a few tenths of a newton in one step), each of the tip's contacts is
+/// scaled by F_p / F_tip — its force on the node and on the needle, and its stiffness, damping and
+/// friction in the implicit step's Jacobian — so that the needle and the tissue meet F_p along the
+/// tangent, no more (NeedleState::puncture_contact_force keeps what the contacts asked). No
+/// allocation.
 void find_punctures(const Model& model, Data& data) noexcept;
 
 /// How far under the surface (in wire radii r_w) stop_needle_tunnels() leaves the tip sphere's

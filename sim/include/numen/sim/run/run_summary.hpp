@@ -196,6 +196,9 @@ struct NeedleRunFigures {
   std::int64_t tunnels_stopped = 0;
   double first_tunnel_s = -1.0;        ///< Time of the first tunnel (s; −1: none).
   double puncture_tip_force_n = 0.0;   ///< Its tip's force along it at its last puncture (N).
+  /// What the tip's contacts asked there before the tissue gave way at the threshold (N;
+  /// core::NeedleState::puncture_contact_force).
+  double puncture_contact_force_n = 0.0;
   double puncture_force_n = 0.0;       ///< Its threshold (NeedleModel::puncture_force; 0: none).
   double deviation_max_mm = 0.0;       ///< Largest deviation of a puncture point from its arc (mm).
   /// Its passes in order, [0, num_passes): each entry starts one; an entry drawn back out before
@@ -363,6 +366,7 @@ struct RunSummary {
   std::int64_t needle_tunnels_stopped = 0;  ///< Steps a needle's tip was held back at tissue.
   std::int64_t needle_passes = 0;        ///< Passes that went through (an entry, then an exit), all needles.
   double needle_puncture_tip_force_n = 0.0;  ///< Tip force at the run's last puncture (N).
+  double needle_puncture_contact_force_n = 0.0;  ///< What its contacts asked there (N).
   double needle_puncture_force_n = 0.0;  ///< That needle's threshold (N).
   double needle_deviation_max_mm = 0.0;  ///< Largest deviation of a puncture point from its arc (mm).
   /// Largest force the needles and their threads put on the tissue over the run (N): |Σ F| over
