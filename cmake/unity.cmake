@@ -11,8 +11,9 @@
 # File-local names (anonymous namespaces, static functions) of the files of one batch share a
 # translation unit: two of one name are a redefinition error. Give one a distinct name, or
 # move a shared helper to a header. Every configure checks this for every pair of files of a
-# target, whatever batches this build makes (numen_check_unity_names() below). NUMEN_UNITY_BATCH=1 turns unity builds off (a change to
-# one file then recompiles that file alone: the setting for editing one file often).
+# target, whatever batches this build makes (numen_check_unity_names() below).
+# NUMEN_UNITY_BATCH=1 turns unity builds off (a change to one file then recompiles that file
+# alone: the setting for editing one file often).
 set(NUMEN_UNITY_BATCH 8 CACHE STRING "Source files per unity translation unit (1: no unity build)")
 if(NOT NUMEN_UNITY_BATCH MATCHES "^[1-9][0-9]*$")
   message(FATAL_ERROR "NUMEN_UNITY_BATCH must be a positive integer, not '${NUMEN_UNITY_BATCH}'")

@@ -125,8 +125,8 @@ TEST(NeedlePuncture, ThePassPuncturesAtTheThresholdSlidesAlongTheArcAndComesOut)
   const PuncturePass p = run_puncture_pass(m, 1.0, 230 * kPunctureDeg, 4.5);
   std::printf(
       "pass at 8.3 mm/s: puncture at step %d, %.4f N along the needle (its contacts asked %.4f N; "
-      "threshold %.2f N); exit at "
-      "step %d; first release at step %d; largest deviation %.3f mm; entry s %.2f -> %.2f mm\n",
+      "threshold %.2f N); exit at step %d; first release at step %d; largest deviation %.3f mm; "
+      "entry s %.2f -> %.2f mm\n",
       p.puncture_step, p.puncture_force, p.contact_force, kPunctureThreshold, p.exit_step,
       p.first_release_step, p.max_deviation * 1e3, p.entry_s_first * 1e3, p.entry_s_last * 1e3);
   ASSERT_TRUE(p.finite);
@@ -189,8 +189,8 @@ TEST(NeedlePuncture, ANeedlePuncturesAnOrganGivenByItsMaterial) {
   const PuncturePass p = run_puncture_pass(m, 1.0, 230 * kPunctureDeg, 2.6);
   std::printf(
       "pass into the material slab: puncture at step %d, %.4f N along the needle (its contacts "
-      "asked %.4f N; "
-      "largest before %.4f N); exit at step %d; largest deviation %.3f mm; tunnels %lld\n",
+      "asked %.4f N; largest before %.4f N); exit at step %d; largest deviation %.3f mm; "
+      "tunnels %lld\n",
       p.puncture_step, p.puncture_force, p.contact_force, p.largest_tip_force_before, p.exit_step,
       p.max_deviation * 1e3, static_cast<long long>(p.tunnels));
   ASSERT_TRUE(p.finite);
@@ -325,8 +325,7 @@ TEST(NeedlePuncture, NearABoxsEdgeTheTopIsPuncturedAtTheThreshold) {
       const PuncturePass p = run_puncture_pass(m, omega, 200 * kPunctureDeg, 200 * kPunctureDeg / omega + 0.5);
       std::printf(
           "edge %.1f mm, %.0f rad/s: %lld punctures (%.3f N, its contacts asked %.3f N, largest "
-          "before %.3f N), %lld exits, %lld tunnels, "
-          "%lld stopped\n",
+          "before %.3f N), %lld exits, %lld tunnels, %lld stopped\n",
           edge * 1e3, omega, static_cast<long long>(p.punctures), p.puncture_force, p.contact_force,
           p.largest_tip_force_before, static_cast<long long>(p.exits),
           static_cast<long long>(p.tunnels), static_cast<long long>(p.tunnels_stopped));

@@ -1,17 +1,19 @@
 /// @file puncture.cpp
 /// The needle through tissue: its puncture test, its ties and its sweep (needle_puncture.hpp).
 
+#include "numen/core/needle_puncture.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 
-#include "contact/collision_query.hpp"
-#include "net/net_terms.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/needle.hpp"
-#include "numen/core/needle_puncture.hpp"
 #include "numen/core/step_stages.hpp"
+
+#include "contact/collision_query.hpp"
+#include "net/net_terms.hpp"
 #include "scratch/data_scratch.hpp"
 
 namespace numen::core {
@@ -258,7 +260,9 @@ void drop_inside_contacts(const Model& model, Data& data, const NeedleModel& n, 
 /// contact of the tip (`at_tip`, of the first `nc`) scaled by F_p / F_tip when the tip's force
 /// along the needle F_tip = NeedleState::tip_force passed F_p = NeedleModel::puncture_force — the
 /// excess taken back from its node's force and its reaction on the needle (compute_net_forces()
-/// added both), its Jacobian coefficients scaled alike — and tip_force set to F_p.
+/// added both: a needle is sharp, so even an organ given by its material meets it with the pair's
+/// penalty on the node alone, no load patch), its Jacobian coefficients scaled alike — and
+/// tip_force set to F_p.
 template <class AtTip>
 void give_way_at_threshold(Data& data, const NeedleModel& n, NeedleState& st, const AtTip& at_tip,
                            int nc) noexcept {

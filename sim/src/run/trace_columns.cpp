@@ -135,7 +135,8 @@ constexpr TraceColumn kColumns[] = {
     {"thread_unconverged", "", "Threads whose Newton iteration ran out this step (the step took its last iterate)",
      [](const R& r, int) noexcept { return static_cast<double>(r.thread_unconverged); }},
     {"needle_tip_force_n", "N",
-     "Force of the tissue on a needle's tip against its tangent this step (> 0 resists it; docs/suturing.md)",
+     "Force of the tissue on a needle's tip against its tangent this step (> 0 resists it; at most the "
+     "threshold in a puncture's step; docs/suturing.md)",
      [](const R& r, int) noexcept { return r.needle_tip_force_n; }},
     {"needle_points", "", "Puncture points the needles hold after the step (entries and exits)",
      [](const R& r, int) noexcept { return static_cast<double>(r.needle_points); }},

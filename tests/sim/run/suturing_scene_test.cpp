@@ -45,8 +45,7 @@ void print_suturing_run(const char* what, const numen::sim::RunSummary& s) {
   std::printf(
       "%s: %lld punctures, %lld exits, %lld releases, %lld tunnels, %lld through; tip force at the "
       "puncture %.4f N (its contacts asked %.4f N); deviation max %.3f mm; entry %.3f mm, exit "
-      "%.3f mm from the marks; thread "
-      "tension max %.3f N; grasps %lld\n",
+      "%.3f mm from the marks; thread tension max %.3f N; grasps %lld\n",
       what, static_cast<long long>(s.needle_punctures), static_cast<long long>(s.needle_exits),
       static_cast<long long>(s.needle_releases), static_cast<long long>(s.needle_tunnels),
       static_cast<long long>(s.needle_passes), s.needle_puncture_tip_force_n,
