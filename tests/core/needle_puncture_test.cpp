@@ -1,7 +1,7 @@
 // Tests of core/needle puncture (needle_puncture.hpp; docs/suturing.md, "The needle through
 // tissue"): a 26 mm half-circle needle, held by the device as the god-object, driven along its own
 // arc (turned about its circle's axis) through a flat 28 × 28 mm patch of tissue — it punctures at
-// its threshold, slides along its arc inside, comes out at an exit point, lets go of the points
+// its threshold (the tissue giving way there within the step), slides along its arc inside, comes out at an exit point, lets go of the points
 // that pass off its tail; no puncture from behind or at too steep an angle; no tunnelling at
 // recorded speeds; no allocation; a model without a needle that punctures runs no needle stage.
 
@@ -13,14 +13,18 @@
 #include <vector>
 
 #include "alloc_counter.hpp"
+#include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/net_collision.hpp"
 #include "numen/core/needle.hpp"
 #include "numen/core/needle_puncture.hpp"
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 #include "needle_rig.hpp"
 #include "sanitizer.hpp"
+#include "scratch/data_scratch.hpp"
 
 namespace {
 
@@ -229,6 +233,65 @@ TEST(NeedlePuncture, NoTunnellingAtRecordedSpeeds) {
   EXPECT_GT(p.contact_force, 2.0 * f_p);
   EXPECT_DOUBLE_EQ(p.puncture_force, f_p);
   EXPECT_NEAR(p.carried_at_puncture, f_p, 1e-3 * f_p);
+}
+
+TEST(NeedlePuncture, ThePuncturesStepTakesTheExcessBackFromTheNodesAndTheNeedle) {
+  // The 0.3 m/s pass up to the puncture's step, that step's stages as core::step() runs them up
+  // to the forces, then find_punctures(): each tip contact scaled by a = F_p / F_tip, and the
+  // nodes' forces and the needle's wrench, which the force stage gave the whole ask, changed by
+  // exactly what the contacts gave back.
+  const core::Model m = puncture_rig();
+  const double omega = 0.3 / m.needles[0].radius, turn = 160 * kPunctureDeg;
+  const int at = run_puncture_pass(m, omega, turn, 0.25).puncture_step;
+  ASSERT_GT(at, 0);
+  core::Data d = core::make_data(m);
+  for (int s = 0; s < at; ++s) {
+    puncture_drive(m, d, s * m.dt, omega, turn);
+    core::step(m, d);
+  }
+  puncture_drive(m, d, at * m.dt, omega, turn);
+  core::step_to_contacts(m, d);
+  if (m.stage_plan & core::kStageContacts) core::detect_contacts(m, d);
+  if (m.stage_plan & core::kStageNodeContacts) core::detect_node_contacts(m, d);
+  if (m.stage_plan & core::kStageGrasp) core::update_grasps(m, d);
+  core::tie_needles(m, d);
+  core::compute_forces(m, d);
+  const core::NeedleModel& n = m.needles[0];
+  const auto body = static_cast<std::size_t>(n.body);
+  const std::vector<core::Vec3> node_force = d.scratch->net.force;
+  const core::Wrench wrench = d.body_wrench[body];
+  const std::vector<core::NodeContact> asked(d.node_contacts.begin(),
+                                             d.node_contacts.begin() + d.num_node_contacts);
+  core::find_punctures(m, d);
+  const core::NeedleState& st = d.needles[0];
+  ASSERT_EQ(st.event, core::PunctureEvent::kPuncture);
+  const double a = n.puncture_force / st.puncture_contact_force;
+  ASSERT_LT(a, 0.5) << "the contacts asked more than twice the threshold";
+  EXPECT_DOUBLE_EQ(st.tip_force, n.puncture_force);
+  std::vector<core::Vec3> given_back(node_force.size(), core::Vec3::Zero());
+  core::Vec3 on_needle = core::Vec3::Zero();
+  int scaled = 0;
+  for (std::size_t c = 0; c < asked.size(); ++c) {
+    const core::NodeContact& was = asked[c];
+    const core::NodeContact& now = d.node_contacts[c];
+    const bool tip = !was.held && was.body_b == n.body &&
+                     was.sphere_b >= n.sphere_begin + n.sphere_count - 3 &&
+                     was.sphere_b < n.sphere_begin + n.sphere_count;
+    if (!tip) {
+      EXPECT_EQ(now.force, was.force) << c;
+      continue;
+    }
+    ++scaled;
+    EXPECT_LT((now.force - a * was.force).norm(), 1e-12) << c;
+    EXPECT_NEAR(now.stiffness, a * was.stiffness, 1e-9 * was.stiffness) << c;
+    given_back[static_cast<std::size_t>(was.node)] += was.force - now.force;
+    on_needle += was.force - now.force;
+  }
+  EXPECT_GE(scaled, 1);
+  for (std::size_t i = 0; i < node_force.size(); ++i)
+    EXPECT_LT((d.scratch->net.force[i] - (node_force[i] - given_back[i])).norm(), 1e-12)
+        << "node " << i;
+  EXPECT_LT((d.body_wrench[body].force - (wrench.force + on_needle)).norm(), 1e-12);
 }
 
 TEST(NeedlePuncture, ATipDrivenThroughTheSurfaceWithoutAPunctureIsHeldAtIt) {
