@@ -15,9 +15,12 @@ Exit status: 0 none found; 1 names defined twice (each printed as file:line: nam
 
 What counts as a definition, at the top level of an anonymous namespace (or a file-level
 `static`): a function (the name before its parameter list; two of one name clash unless their
-parameter lists differ, as an overload set), a struct, class, union or enum, a `using` alias, a
-variable or constant. Test macros (TEST, TEST_F, ...) are not names. The reading is lexical
-(comments and literals removed, braces counted), not a C++ parse.
+parameter lists differ, as an overload set), a struct, class, union or enum, a variable or
+constant, and an alias (`using X = ...`, `typedef`, `namespace X = ...`) or using-declaration
+(`using a::X;`). Aliases and using-declarations of one thing may repeat (the same text, or one a
+`::`-suffix of the other); of another thing, or beside a definition, they clash. Names in distinct
+named namespaces do not meet. Test macros (TEST, TEST_F, ...) are not names. The reading is
+lexical (comments and literals removed, braces counted), not a C++ parse.
 """
 import re
 import sys
@@ -148,9 +151,9 @@ def declared(head):
         return m.group(2), "using", "= " + m.group(1)
     if re.match(r"using\s", h):
         return None
-    m = re.match(r"(?:typedef\s.*\b(\w+)\s*$)", h)
+    m = re.match(r"typedef\s+(.*?)\b(\w+)\s*$", h)
     if m:
-        return m.group(1), "type", ""
+        return m.group(2), "alias", "= " + re.sub(r"\s+", "", m.group(1))
     m = re.match(r"(?:(?:static|inline|constexpr)\s+)*(?:struct|class|union|enum(?:\s+class|\s+struct)?)\s+(?:alignas\s*\(.*?\)\s*)?(\w+)", h)
     if m and "(" not in h.split(m.group(1), 1)[0]:
         rest = h[m.end():].strip()

@@ -95,6 +95,10 @@ class UnityNames(unittest.TestCase):
                         "namespace { using Key = std::tuple<int, int, int>; }\n")
         self.assertEqual(rc, 1, out)
         self.assertIn("'Key'", out)
+        rc, out = check("namespace { typedef int Id; }\n", "namespace { typedef long Id; }\n")
+        self.assertEqual(rc, 1, out)
+        self.assertIn("'Id'", out)
+        self.assertEqual(check("namespace { typedef int Id; }\n", "namespace { typedef int Id; }\n")[0], 0)
 
     def test_the_same_name_in_two_targets_is_not_a_clash(self):
         with tempfile.TemporaryDirectory() as d:
