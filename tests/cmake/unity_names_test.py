@@ -10,15 +10,19 @@ import unittest
 SCRIPT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "cmake", "unity_names.py")
 
 
-def check(*files, target="t"):
-    """Runs the script over `files` (source texts) as the files of one target: (status, output)."""
+def check(*files, targets=None, missing=False):
+    """Runs the script over `files` (source texts), each of target `targets[i]` (all of one target
+    "t" when not given), and, with `missing`, a listed file that does not exist:
+    (status, stdout + stderr)."""
     with tempfile.TemporaryDirectory() as d:
         lines = []
         for i, text in enumerate(files):
             path = os.path.join(d, f"f{i}.cpp")
             with open(path, "w", encoding="utf-8") as f:
                 f.write(textwrap.dedent(text))
-            lines.append(f"{target}\t{path}")
+            lines.append(f"{targets[i] if targets else 't'}\t{path}")
+        if missing:
+            lines.append(f"t\t{d}/missing.cpp")
         listing = os.path.join(d, "list.txt")
         with open(listing, "w", encoding="utf-8") as f:
             f.write("\n".join(lines) + "\n")
@@ -101,27 +105,15 @@ class UnityNames(unittest.TestCase):
         self.assertEqual(check("namespace { typedef int Id; }\n", "namespace { typedef int Id; }\n")[0], 0)
 
     def test_the_same_name_in_two_targets_is_not_a_clash(self):
-        with tempfile.TemporaryDirectory() as d:
-            paths = []
-            for i in range(2):
-                paths.append(os.path.join(d, f"g{i}.cpp"))
-                with open(paths[-1], "w", encoding="utf-8") as f:
-                    f.write("namespace { int helper() { return 0; } }\n")
-            listing = os.path.join(d, "list.txt")
-            with open(listing, "w", encoding="utf-8") as f:
-                f.write(f"a\t{paths[0]}\nb\t{paths[1]}\n")
-            r = subprocess.run([sys.executable, SCRIPT, listing], capture_output=True, text=True)
-            self.assertEqual(r.returncode, 0, r.stdout + r.stderr)
+        helper = "namespace { int helper() { return 0; } }\n"
+        rc, out = check(helper, helper, targets=["a", "b"])
+        self.assertEqual(rc, 0, out)
+        self.assertEqual(check(helper, helper)[0], 1)
 
     def test_an_unreadable_file_is_an_error_naming_it(self):
-        with tempfile.TemporaryDirectory() as d:
-            listing = os.path.join(d, "list.txt")
-            with open(listing, "w", encoding="utf-8") as f:
-                f.write(f"a\t{d}/missing.cpp\n")
-            r = subprocess.run([sys.executable, SCRIPT, listing], capture_output=True, text=True)
-            self.assertEqual(r.returncode, 2)
-            self.assertIn("missing.cpp", r.stderr)
-
+        rc, out = check(missing=True)
+        self.assertEqual(rc, 2)
+        self.assertIn("missing.cpp", out)
 
 if __name__ == "__main__":
     unittest.main()

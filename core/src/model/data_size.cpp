@@ -85,8 +85,7 @@ DataFootprint data_footprint(const Data& d) noexcept {
     threads += heap(t.band.diag, t.band.lower1, t.band.lower2, t.band.rhs, t.terms, t.saved_position,
                     t.trial_position, t.trial_velocity, t.whole_update, t.sweep_order, t.segment_min,
                     t.segment_max, t.run_min, t.run_max, t.touched_before, t.touched, t.self_pairs,
-                    t.tissue_hits, t.tissue_order,
-                    t.tissue_key, t.net_node_outcode);
+                    t.tissue_hits, t.tissue_order, t.tissue_key, t.net_node_outcode);
   f.groups[6] = {"needles and threads", threads};
   f.groups[7] = {"scratch block", sizeof(DataScratch)};
   return f;

@@ -103,10 +103,9 @@ void ThreadScratch::resize(const ThreadModel& t, int model_nodes, int graspers) 
   const auto runs = static_cast<std::size_t>((t.segments + kThreadSegmentRun - 1) / kThreadSegmentRun);
   run_min.assign(runs, Vec3::Zero());
   run_max.assign(runs, Vec3::Zero());
-  std::array<int, kThreadTouchedSpheres> none;
-  none.fill(-1);
-  touched_before.assign(static_cast<std::size_t>(t.segments), none);
-  touched.assign(static_cast<std::size_t>(t.segments), none);
+  touched_before.resize(static_cast<std::size_t>(t.segments));
+  touched.resize(static_cast<std::size_t>(t.segments));
+  forget_touches();
   sweep_axis = 0;
   tissue_hits.assign(nodes, ThreadTissueHit{});
   tissue_order.resize(nodes);

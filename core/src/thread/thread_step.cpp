@@ -112,15 +112,17 @@ Vec3 point_term_force(const ThreadPointTerm& t, const Vec3& v, const Vec3& v0, d
   return t.force - h * t.stiffness * (v - t.target_velocity) - t.damping * (v - v0);
 }
 
+/// A term's thread point's value w_a u_a + w_b u_b of the nodes' `u` (velocities: m/s).
+Vec3 term_point(const ThreadPointTerm& t, const std::vector<Vec3>& u) noexcept {
+  return t.wa * u[static_cast<std::size_t>(t.a - 1)] + t.wb * u[static_cast<std::size_t>(t.b - 1)];
+}
+
 /// Whether a term acts on the iterate `v`: a kept contact once its force has pushed along its
 /// normal on an iterate of this step (the point at the step's end inside the sphere; `engaged`
 /// from then on), every other term always.
 bool term_acts(const ThreadState& st, const std::vector<Vec3>& v, ThreadPointTerm& t, double h) noexcept {
   if (!t.kept || t.engaged) return true;
-  const auto ia = static_cast<std::size_t>(t.a - 1), ib = static_cast<std::size_t>(t.b - 1);
-  const Vec3 vp = t.wa * v[ia] + t.wb * v[ib];
-  const Vec3 vp0 = t.wa * st.velocity[ia] + t.wb * st.velocity[ib];
-  t.engaged = t.axis.dot(point_term_force(t, vp, vp0, h)) > 0.0;
+  t.engaged = t.axis.dot(point_term_force(t, term_point(t, v), term_point(t, st.velocity), h)) > 0.0;
   return t.engaged;
 }
 
@@ -135,9 +137,7 @@ Vec3 term_force(const ThreadPointTerm& t, const Vec3& vp, const Vec3& vp0, doubl
 void add_point_term(const ThreadState& st, const std::vector<Vec3>& v, const ThreadPointTerm& t,
                     double h, ThreadBand& band) noexcept {
   const auto ia = static_cast<std::size_t>(t.a - 1), ib = static_cast<std::size_t>(t.b - 1);
-  const Vec3 vp = t.wa * v[ia] + t.wb * v[ib];
-  const Vec3 vp0 = t.wa * st.velocity[ia] + t.wb * st.velocity[ib];
-  const Vec3 f = h * term_force(t, vp, vp0, h);
+  const Vec3 f = h * term_force(t, term_point(t, v), term_point(t, st.velocity), h);
   const Mat3 m = h * t.damping + (h * h * t.matrix_scale) * t.stiffness;
   band.rhs[ia + 1] += t.wa * f;
   band.rhs[ib + 1] += t.wb * f;
@@ -241,10 +241,9 @@ void hand_point_term_forces(Data& data, ThreadState& st, ThreadScratch& sc,
                             const std::vector<Vec3>& v, double h) noexcept {
   for (int t = 0; t < sc.num_terms; ++t) {
     const ThreadPointTerm& term = sc.terms[static_cast<std::size_t>(t)];
-    const auto ia = static_cast<std::size_t>(term.a - 1), ib = static_cast<std::size_t>(term.b - 1);
-    const Vec3 vp = term.wa * v[ia] + term.wb * v[ib];
-    const Vec3 vp0 = term.wa * st.velocity[ia] + term.wb * st.velocity[ib];
     if (term.kept && !term.engaged) continue;  // never pushed on an iterate: no contact
+    const auto ia = static_cast<std::size_t>(term.a - 1), ib = static_cast<std::size_t>(term.b - 1);
+    const Vec3 vp = term_point(term, v), vp0 = term_point(term, st.velocity);
     const Vec3 f = term_force(term, vp, vp0, h);
     if (term.kept && f.isZero(0.0)) continue;  // it pushed on an iterate, not at the step's end
     if (term.kept) ++st.output.kept_contacts;

@@ -213,9 +213,8 @@ void summarize_needles(RunSummary& s) {
         << "' went into tissue without puncturing it " << r.tunnels << " "
         << plural_of(r.tunnels, "time", "times") << ", the first at " << r.first_tunnel_s
         << " s (a tunnel: its tip crossed a net's surface inwards within one step, past the "
-           "contact that "
-           "should have held it until the puncture force; docs/suturing.md, \"The needle through "
-           "tissue\")";
+           "contact that should have held it until the puncture force; docs/suturing.md, \"The "
+           "needle through tissue\")";
       s.warnings.push_back(w.str());
     }
   }
