@@ -6,8 +6,10 @@
 /// Private to numen::core (core/src/multirate/).
 
 #include <span>
+#include <string>
 
 #include "numen/core/data.hpp"
+#include "numen/core/model.hpp"
 
 #include "multirate/net.hpp"
 #include "scratch/solver_scratch.hpp"
@@ -43,6 +45,13 @@ inline Vec3 effective_contact_force(const Contact& c, const ContactTerm& t, bool
   f -= t.friction * (dv - n.dot(dv) * n);
   return f;
 }
+
+/// finalize_model(`m`), a scene-loop model, then the god-object's bodies `god` (scene indices)
+/// made one articulation for collision (ArticulationTopology::body_tree): the scene loop never
+/// detects their mutual contacts, which are the device step's (write_plane_contacts()) and
+/// which, grown by the margin, would fill the contacts' room (kMaxContacts). Returns
+/// finalize_model()'s message. Load time (device_loop.cpp).
+std::string finalize_scene_loop_model(Model& m, std::span<const int> god);
 
 /// The counts since reset (steps with a contact overflow, a clamped contact stiffness, a sphere
 /// behind a net's surface, a body–body crossing, pass-throughs, a non-finite state) from `from` to

@@ -9,9 +9,11 @@
 #include <cmath>
 
 #include "numen/core/data.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
+#include "numen/core/step_stages.hpp"
 
 #include "scratch/data_scratch.hpp"
 #include "multirate/contact.hpp"
@@ -30,6 +32,16 @@ std::string body_error(const Model& scene, int body) {
 }
 
 }  // namespace
+
+std::string detail::finalize_scene_loop_model(Model& m, std::span<const int> god) {
+  if (std::string error = finalize_model(m); !error.empty()) return error;
+  std::vector<int>& tree = m.articulation.body_tree;
+  if (god.empty() || tree.size() != m.bodies.size()) return "";
+  const int one = tree[static_cast<std::size_t>(god.front())];
+  for (int g : god) tree[static_cast<std::size_t>(g)] = one;
+  m.stage_plan = compiled_stages(m);  // what can collide changed
+  return "";
+}
 
 std::vector<int> god_object_bodies(const Model& scene, int body, std::span<const int> others) {
   std::vector<int> out;
@@ -95,6 +107,19 @@ std::string make_god_object_model(const Model& scene, int body, double device_dt
     jm.parent = j.parent < 0 ? -1 : local[static_cast<std::size_t>(j.parent)];
     m.joints.push_back(jm);
   }
+  // The graspers whose jaws are both here grasp in the device step, what they hold carried here
+  // too (MultirateSettings::carried); the scene loop does not grasp (make_proximity_model()).
+  m.grasps.clear();
+  for (const GraspModel& g : scene.grasps) {
+    if (g.jaws[0] < 0 || g.jaws[1] < 0) continue;
+    const int j0 = local[static_cast<std::size_t>(g.jaws[0])];
+    const int j1 = local[static_cast<std::size_t>(g.jaws[1])];
+    if (j0 < 0 || j1 < 0) continue;
+    GraspModel gm = g;
+    gm.jaws = {j0, j1};
+    gm.jaw_joints = {-1, -1};  // derived again by finalize_model()
+    m.grasps.push_back(std::move(gm));
+  }
   m.obstacles.clear();
   m.static_spheres.clear();
   // The nets are the scene loop's; those on the god-object ride on their components here.
@@ -137,7 +162,8 @@ std::string make_proximity_model(const Model& scene, int body, double margin, Mo
       m.body_spheres[static_cast<std::size_t>(s)].radius += margin;
   }
   detail::grow_god_object_nodes(device_body, margin, m);
-  std::string error = finalize_model(m);
+  m.grasps.clear();  // the device step grasps (make_god_object_model())
+  std::string error = detail::finalize_scene_loop_model(m, god_object_bodies(scene, body, others));
   if (!error.empty()) return "multirate: proximity model: " + error;
   out = std::move(m);
   return "";

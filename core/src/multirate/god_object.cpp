@@ -9,9 +9,11 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
+#include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
@@ -35,14 +37,75 @@ int fold_substeps(double h, double fold_step) noexcept {
 }
 
 // The model of one sub-step of a folded scene step: `scene_loop` (finalized) with dt = its dt
-// / `substeps`, finalized. Built once, at construction: no Model is written at run time.
-Model fold_model_of(const Model& scene_loop, int substeps) {
+// / `substeps`, finalized with its god-object's bodies `god` one articulation
+// (detail::finalize_scene_loop_model()). Built once, at construction: no Model is written at
+// run time.
+Model fold_model_of(const Model& scene_loop, int substeps, std::span<const int> god) {
   if (substeps <= 1) return Model{};
   Model m = scene_loop;
   m.dt = scene_loop.dt / substeps;
-  if (std::string error = finalize_model(m); !error.empty())
+  if (std::string error = detail::finalize_scene_loop_model(m, god); !error.empty())
     throw std::invalid_argument("multirate: folded scene-loop model: " + error);
   return m;
+}
+
+// Both jaws of grasper `g` are in the god-object (`device_body`: per scene body its god-object
+// model index or −1): it grasps in the device step (make_god_object_model()).
+bool grasped_in(const GraspModel& g, const std::vector<int>& device_body) noexcept {
+  for (int jaw : g.jaws)
+    if (jaw < 0 || jaw >= static_cast<int>(device_body.size()) ||
+        device_body[static_cast<std::size_t>(jaw)] < 0)
+      return false;
+  return true;
+}
+
+// The refusals of carried bodies and graspers (MultirateGodObject's constructor): throws
+// std::invalid_argument naming the body or grasper. `slots`: the bodies the device may hold.
+void check_carried(const Model& scene, int body, const MultirateSettings& settings,
+                   std::size_t slots) {
+  const std::vector<int>& tree = scene.articulation.body_tree;
+  const auto tree_of = [&](int b) {
+    return tree.size() == scene.bodies.size() ? tree[static_cast<std::size_t>(b)] : b;
+  };
+  std::vector<int> instruments(settings.other_devices);
+  if (body >= 0) instruments.push_back(body);
+  for (int t : settings.tools) instruments.push_back(t);
+  for (int c : settings.carried) {
+    if (c < 0 || c >= scene.num_bodies())
+      throw std::invalid_argument("multirate: carried body " + std::to_string(c) +
+                                  " is not a body of the scene (" +
+                                  std::to_string(scene.num_bodies()) + " bodies)");
+    const BodyModel& bm = scene.bodies[static_cast<std::size_t>(c)];
+    const auto refuse = [&](const std::string& why) {
+      throw std::invalid_argument("multirate: carried body '" + bm.name + "' " + why +
+                                  ": the device loop carries free bodies only");
+    };
+    if (bm.anchored) refuse("is anchored");
+    for (const JointModel& j : scene.joints)
+      if (j.child == c || j.parent == c) refuse("is in joint '" + j.name + "'");
+    for (const NetModel& n : scene.nets)
+      if (n.body == c) refuse("is the component of net '" + n.name + "'");
+    for (int i : instruments)
+      if (i >= 0 && i < scene.num_bodies() && tree_of(i) == tree_of(c))
+        refuse("is in an instrument's articulation");
+  }
+  if (scene.grasps.empty()) return;
+  if (slots > 1)
+    throw std::invalid_argument(
+        "multirate: graspers hold what they hold in the device step, and a switch of the held "
+        "body would drop it: a scene with [[grasp]] runs multirate with one held body (no "
+        "attach events to another)");
+  if (body < 0 && settings.tools.empty()) return;
+  const int held = body >= 0 ? body : settings.tools.front();
+  std::vector<int> device_body(scene.bodies.size(), -1);
+  std::vector<int> riders = settings.other_devices;
+  riders.insert(riders.end(), settings.carried.begin(), settings.carried.end());
+  for (int g : god_object_bodies(scene, held, riders)) device_body[static_cast<std::size_t>(g)] = 0;
+  for (const GraspModel& g : scene.grasps)
+    if (!grasped_in(g, device_body))
+      throw std::invalid_argument("multirate: grasper '" + g.name +
+                                  "' has a jaw in no device's instrument: the device loop "
+                                  "grasps, and the scene loop does not");
 }
 
 }  // namespace
@@ -72,11 +135,15 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
     if (std::find(bodies.begin(), bodies.end(), t) == bodies.end()) bodies.push_back(t);
   if (bodies.empty())
     throw std::invalid_argument("multirate: no god-object: the device holds no body and has no tools");
+  // The carried bodies ride in every god-object as the other devices' instruments do.
+  std::vector<int> riders = settings.other_devices;
+  riders.insert(riders.end(), settings.carried.begin(), settings.carried.end());
+  check_carried(scene, body, settings, bodies.size());
   std::size_t largest = 1;
   for (int b : bodies) {
     Slot s;
     s.body = b;
-    const std::span<const int> others(settings.other_devices);
+    const std::span<const int> others(riders);
     std::string error = make_god_object_model(scene, b, scene.dt, s.device_model, others);
     if (error.empty()) error = make_proximity_model(scene, b, settings.margin, s.scene_model, others);
     if (!error.empty()) throw std::invalid_argument(error);
@@ -101,9 +168,11 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
         s.scene_joints.push_back(static_cast<int>(j));
       }
     s.scene_model.joints = std::move(kept);
-    error = finalize_model(s.scene_model);
+    error = detail::finalize_scene_loop_model(s.scene_model, s.bodies);
     if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
-    s.fold_model = fold_model_of(s.scene_model, fold_substeps_);
+    s.fold_model = fold_model_of(s.scene_model, fold_substeps_, s.bodies);
+    for (std::size_t g = 0; g < scene.grasps.size(); ++g)
+      if (grasped_in(scene.grasps[g], s.device_body)) s.grasps.push_back(static_cast<int>(g));
     s.device = make_god_object_data(s.device_model);
     s.scene = make_data(s.scene_model);
     slots_.push_back(std::move(s));
@@ -122,9 +191,10 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   free_scene_model_ = scene;
   free_scene_model_.dt = scene.dt * settings.ratio;
   free_scene_model_.initial_held_body = -1;
+  free_scene_model_.grasps.clear();  // the device step's (make_god_object_model())
   if (std::string error = finalize_model(free_scene_model_); !error.empty())
     throw std::invalid_argument("multirate: scene-loop model: " + error);
-  free_fold_model_ = fold_model_of(free_scene_model_, fold_substeps_);
+  free_fold_model_ = fold_model_of(free_scene_model_, fold_substeps_, {});
   free_scene_ = make_data(free_scene_model_);
   for (std::size_t j = 0; j < scene.joints.size(); ++j) free_joints_.push_back(static_cast<int>(j));
   scene_slot_ = slot_ = body >= 0 ? 0 : -1;
@@ -425,6 +495,21 @@ void MultirateGodObject::view(Data& out) const noexcept {
   }
   out.num_contacts = count;
   out.max_penetration = deepest;
+  if (slot_ >= 0) {  // the graspers: the device step's, their bodies the scene's
+    const Slot& s = slot();
+    const auto scene_body = [&s](int b) noexcept {
+      return b >= 0 && b < static_cast<int>(s.bodies.size()) ? s.bodies[static_cast<std::size_t>(b)] : b;
+    };
+    for (std::size_t g = 0; g < s.grasps.size() && g < s.device.grasps.size(); ++g) {
+      const auto sg = static_cast<std::size_t>(s.grasps[g]);
+      if (sg >= out.grasps.size()) continue;
+      GraspState& o = out.grasps[sg];
+      o = s.device.grasps[g];
+      o.body = scene_body(o.body);
+      for (GraspPoint& p : o.points) p.jaw = scene_body(p.jaw);
+      for (GraspRecord& r : o.log) r.body = scene_body(r.body);
+    }
+  }
   out.time = static_cast<double>(counters_.device_steps) * slots_.front().device_model.dt;
   out.step_count = counters_.device_steps;
 }

@@ -13,7 +13,8 @@ MultirateRun::MultirateRun(const Scene& scene) : scene_(&scene) {
   if (!scene.multirate) return;
   const core::MultirateSettings settings{scene.multirate->ratio, scene.multirate->margin_m,
                                          scene.multirate->tools, scene.multirate->fold_step_s,
-                                         scene.multirate->other_devices};
+                                         scene.multirate->other_devices,
+                                         scene.multirate->carried};
   god_object_ = std::make_unique<core::MultirateGodObject>(
       scene.model, scene.model.initial_held_body, settings);
 }

@@ -625,10 +625,20 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     if (d && scene.multirate)
       d->table.fail("body", "a hand's servo watches the single-rate step's bodies: a scene with "
                             "[multirate] has no servo yet (docs/suturing.md, \"The drivers' sight\")");
-  if (scene.multirate && !scene.model.grasps.empty())
-    root.tables("grasp").front().fail(
-        "name", "grasping runs in the single-rate step: a scene with [multirate] has no grasper yet "
-                "(docs/grasping.md, \"Not yet\")");
+  if (scene.multirate) {
+    // The device step grasps bodies only: a net's tissue is the scene loop's.
+    const std::vector<TomlTable> grasp_tables = root.tables("grasp");
+    for (std::size_t g = 0; g < scene.model.grasps.size() && g < grasp_tables.size(); ++g)
+      if (scene.model.grasps[g].tissue && !scene.model.nets.empty())
+        scene.warnings.push_back(
+            grasp_tables[g]
+                .error("tissue", "grasper '" + scene.model.grasps[g].name +
+                                     "' holds bodies only in a scene with [multirate]: the jaws "
+                                     "are the device loop's and the tissue the scene loop's, and "
+                                     "a grip across the two is not built (docs/multirate.md, "
+                                     "\"Grasping in the device loop\")")
+                .what());
+  }
   if (overrides.replay) {
     scene.plant.reset();
     for (SceneDevice& d : scene.extra_devices) d.plant.reset();

@@ -71,13 +71,39 @@ void parse_multirate(const TomlTable& root, Scene& scene) {
     m.other_devices.push_back(driven);
   }
   std::vector<char> in_god_object(model.bodies.size(), 0);
+  for (int b : bodies)
+    for (int g : core::god_object_bodies(model, b, m.other_devices)) in_god_object[static_cast<std::size_t>(g)] = 1;
+  // With graspers, what the jaws may hold rides in the device loop: every free body.
+  const std::vector<TomlTable> grasp_tables = root.tables("grasp");
+  for (std::size_t g = 0; g < model.grasps.size() && g < grasp_tables.size(); ++g)
+    for (int jaw : model.grasps[g].jaws)
+      if (jaw >= 0 && !in_god_object[static_cast<std::size_t>(jaw)])
+        grasp_tables[g].fail("jaws", "jaw '" + model.bodies[static_cast<std::size_t>(jaw)].name +
+                                         "' is in no device's instrument: in a scene with "
+                                         "[multirate] the device loop grasps, the scene loop "
+                                         "does not");
+  if (!model.grasps.empty()) {
+    if (bodies.size() > 1)
+      table->fail("scene_dt", "a scene with [[grasp]] runs multirate with one held body (no "
+                              "`attach` event to another): the jaws hold in the device step, and "
+                              "a switch of the held body would drop what they hold");
+    for (int b = 0; b < model.num_bodies(); ++b) {
+      const core::BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
+      bool free = !bm.anchored && !in_god_object[static_cast<std::size_t>(b)];
+      for (const core::JointModel& j : model.joints) free = free && j.child != b && j.parent != b;
+      for (const core::NetModel& n : model.nets) free = free && n.body != b;
+      if (free) m.carried.push_back(b);
+    }
+  }
+  std::vector<int> riders = m.other_devices;
+  riders.insert(riders.end(), m.carried.begin(), m.carried.end());
   for (int b : bodies) {
     core::Model device;
-    const std::string error = core::make_god_object_model(model, b, dt, device, m.other_devices);
+    const std::string error = core::make_god_object_model(model, b, dt, device, riders);
     if (!error.empty()) table->fail("scene_dt", error);
-    for (int g : core::god_object_bodies(model, b, m.other_devices)) in_god_object[static_cast<std::size_t>(g)] = 1;
     m.tools.push_back(b);
   }
+  for (int c : m.carried) in_god_object[static_cast<std::size_t>(c)] = 1;
   // The devices drive the god-object's bodies and joints only: the rest is the scene loop's.
   std::vector<const platform::DeviceBinding*> bindings{&scene.binding};
   for (const SceneDevice& d : scene.extra_devices) bindings.push_back(&d.binding);

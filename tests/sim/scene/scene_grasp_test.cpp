@@ -1,12 +1,14 @@
 // Tests of sim/scene/scene_grasp: the [[grasp]] keys of a scene file, their defaults, the
 // located errors and the load warning of a body the grip cannot hold (docs/scenes.md,
-// "Grasping"; docs/grasping.md).
+// "Grasping"; docs/grasping.md); with [multirate], the bodies the device loop carries, the
+// tissue warning and the grasper refused outside the instruments (docs/multirate.md).
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "build_features.hpp"
 #include "numen/core/grasp.hpp"
@@ -154,14 +156,41 @@ TEST(SceneGrasp, TheHeavyBodyWarningLeavesOutTheGraspersOwnInstrument) {
   EXPECT_EQ(own, 0) << "the grasper's own tube is listed as a heavy body";
 }
 
-TEST(SceneGrasp, AMultirateSceneIsRefusedAtTheGrasp) {
+TEST(SceneGrasp, AMultirateSceneCarriesTheFreeBodiesAndWarnsThatItHoldsNoTissue) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
+  numen::test::TempDir dir;
+  const std::string multirate = "\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n";
+  const std::string grasp = "\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\n";
+  const numen::sim::Scene s =
+      numen::sim::load_scene(dir.write("mr.toml", default_with_grasp(multirate + grasp)));
+  ASSERT_TRUE(s.multirate.has_value());
+  const auto named = std::find_if(s.model.bodies.begin(), s.model.bodies.end(),
+                                  [](const numen::core::BodyModel& b) { return b.name == "block"; });
+  ASSERT_NE(named, s.model.bodies.end());
+  const int block = static_cast<int>(named - s.model.bodies.begin());
+  // The block is the one free body: the device loop carries it (what the jaws may hold).
+  EXPECT_EQ(s.multirate->carried, std::vector<int>{block});
+  const auto tissue_warning = [](const numen::sim::Scene& scene) {
+    return std::count_if(scene.warnings.begin(), scene.warnings.end(), [](const std::string& w) {
+      return w.find("grasp[0].tissue") != std::string::npos &&
+             w.find("holds bodies only") != std::string::npos;
+    });
+  };
+  EXPECT_EQ(tissue_warning(s), 1);  // the default scene has an organ
+  const numen::sim::Scene off = numen::sim::load_scene(
+      dir.write("off.toml", default_with_grasp(multirate + grasp + "tissue = false\n")));
+  EXPECT_EQ(tissue_warning(off), 0);
+}
+
+TEST(SceneGrasp, AMultirateGrasperOutsideTheInstrumentsIsRefusedAtItsJaws) {
   NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
   numen::test::TempDir dir;
   const std::string text = default_with_grasp(
-      "\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n\n[[grasp]]\nname = \"grasper\"\njaws = [\"jaw_1\", \"jaw_2\"]\n");
-  const std::string& dt_text = text;
-  const std::size_t at = dt_text.rfind("name = \"grasper\"");
-  const int line = 1 + static_cast<int>(std::count(dt_text.begin(), dt_text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
-  numen::test::expect_located(numen::test::load_error(dir, dt_text), (dir / "bad.toml").string(), line, 0,
-                              "grasp[0].name", "grasping runs in the single-rate step");
+      "\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n\n[[body]]\nname = \"loose\"\nmass = 0.01\n"
+      "material = \"steel\"\nposition = [0.3, 0.2, 0.2]\nspheres = [[0.0, 0.0, 0.0, 0.004]]\n\n"
+      "[[grasp]]\nname = \"odd\"\njaws = [\"block\", \"loose\"]\n");
+  const std::size_t at = text.rfind("jaws = [\"block\"");
+  const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+  numen::test::expect_located(numen::test::load_error(dir, text), (dir / "bad.toml").string(), line, 0,
+                              "grasp[0].jaws", "is in no device's instrument");
 }

@@ -45,7 +45,10 @@ std::vector<int> god_object_bodies(const Model& scene, int body, std::span<const
 /// scene (the held body by the target, the others by their body targets, Eq. 6; each body's
 /// Eq. 8 gains its device's, Model::extra_feedback), and the bodies of two articulations collide
 /// with each other in the device step (step_god_object(): instrument clashes at the device
-/// rate); refused: a body of `others` out of range. Load time: allocates.
+/// rate); refused: a body of `others` out of range. `others` may also name free bodies the device
+/// loop carries (MultirateSettings::carried: driven by nothing). The scene's graspers whose two
+/// jaws are in the model grasp here, in the device step (grasp.hpp, their jaws renumbered; the
+/// others are left out): docs/multirate.md, "Grasping in the device loop". Load time: allocates.
 std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out,
                                   std::span<const int> others = {});
 
@@ -60,7 +63,8 @@ Data make_god_object_data(const Model& god_object);
 /// on it, so that a contact is found, and its plane built, while the sphere is still up to
 /// `margin` away from the surface. Returns "" and fills `out`, or a message (body out of range,
 /// margin < 0 or not finite). `others`: the other devices' bodies (god_object_bodies()), whose
-/// articulations' spheres are grown too. Load time: allocates.
+/// articulations' spheres are grown too. It has no grasper: the device step grasps
+/// (make_god_object_model()). Load time: allocates.
 std::string make_proximity_model(const Model& scene, int body, double margin, Model& out,
                                  std::span<const int> others = {});
 

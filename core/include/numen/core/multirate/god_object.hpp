@@ -36,6 +36,13 @@ struct MultirateSettings {
   /// target (Eq. 6) and with its own Eq. 8 feedback (Data::feedback_group), and their mutual
   /// contacts are the device step's (write_plane_contacts()). Empty: one device.
   std::vector<int> other_devices{};
+  /// Free bodies the device loop steps with the god-object (issue 69; docs/multirate.md,
+  /// "Grasping in the device loop"): the bodies its graspers may hold (a peg, a needle), each
+  /// its own articulation in every god-object as the other devices' are, but driven by nothing:
+  /// gravity, the planes of its contacts with the scene, its contacts with the instruments at
+  /// the device rate and, held, the grasp's springs in the device step. The scene loop imposes
+  /// them as it imposes the god-object. Empty: none.
+  std::vector<int> carried{};
 };
 
 /// Counters of a MultirateGodObject. The device loop writes device_steps, stale_models,
@@ -118,7 +125,11 @@ class MultirateGodObject {
   /// body at all (`body` −1 and no tools), `body` −1 with other devices (settings.other_devices:
   /// the first device holds a body from the start), or a net on a body in none of their god-objects
   /// and not anchored (the device loop feels a net only through its god-object's node planes,
-  /// or an organ's through planes on the god-object's spheres). Allocates (load time).
+  /// or an organ's through planes on the god-object's spheres); with graspers (Model::grasps,
+  /// held in the device step: make_god_object_model()), for a carried body that is anchored, in
+  /// a joint, a net's component or in an instrument's articulation, a grasper whose jaws are not
+  /// both in the god-object, and more than one body the device may hold (a switch would drop
+  /// what the jaws hold). Allocates (load time).
   MultirateGodObject(const Model& scene, int body, const MultirateSettings& settings);
 
   /// One device period on one thread: every N-th (the first included, and the first after a
@@ -176,7 +187,8 @@ class MultirateGodObject {
   /// step's in the period that took its model, each loop's report its own model's
   /// Model::stage_plan; the *_steps counters summed); the joint states (the articulation's
   /// from the device loop, the others from the snapshot) and the larger drift; time and
-  /// step_count of the device periods. Leaves the caller's fields (held_body, targets,
+  /// step_count of the device periods; the graspers' states (Data::grasps: the device step's,
+  /// their bodies' indices the scene's). Leaves the caller's fields (held_body, targets,
   /// applied wrenches) alone. Never allocates.
   void view(Data& out) const noexcept;
 
@@ -214,6 +226,7 @@ class MultirateGodObject {
     Model fold_model;              // scene_model at a folded step's sub-step (fold_substeps_ > 1)
     Data scene;                    // the scene loop's Data while this god-object is held
     std::vector<int> scene_joints; // per scene_model joint: its scene joint index
+    std::vector<int> grasps;       // per device_model grasper: its scene grasper index
   };
   Slot& slot() noexcept { return slots_[static_cast<std::size_t>(std::max(slot_, 0))]; }
   const Slot& slot() const noexcept { return slots_[static_cast<std::size_t>(std::max(slot_, 0))]; }

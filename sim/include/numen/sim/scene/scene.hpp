@@ -122,6 +122,10 @@ struct MultirateScene {
   /// link to a body), whose articulation joins the god-object (core::MultirateSettings::
   /// other_devices).
   std::vector<int> other_devices;
+  /// With graspers: the free bodies the device loop steps with the god-object, what the jaws may
+  /// hold (core::MultirateSettings::carried): every body not anchored, in no joint, no net's
+  /// component and in no device's articulation.
+  std::vector<int> carried;
 };
 
 /// One device of a scene beyond the first: entries 1 .. N−1 of a `[[device]]` array
