@@ -97,7 +97,7 @@ numen_install_headers(${PROJECT_SOURCE_DIR}/core/include
   numen/core/multirate.hpp numen/core/multirate/device_loop.hpp numen/core/multirate/exchange.hpp
   numen/core/multirate/god_object.hpp numen/core/multirate/planes.hpp numen/core/net_collision.hpp numen/core/net_forces.hpp numen/core/net_model.hpp
   numen/core/net_material.hpp numen/core/net_tissue_contact.hpp numen/core/net_surface_map.hpp
-  numen/core/net_state.hpp numen/core/rigid_body.hpp numen/core/step.hpp
+  numen/core/net_state.hpp numen/core/rigid_body.hpp numen/core/sliding_tie.hpp numen/core/step.hpp
   numen/core/step_outputs.hpp numen/core/step_stages.hpp numen/core/thread.hpp numen/core/types.hpp)
 numen_install_headers(${PROJECT_BINARY_DIR}/core/include  # generated
   numen/core/features.hpp numen/version.hpp)

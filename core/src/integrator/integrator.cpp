@@ -19,6 +19,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/net_forces.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/sliding_tie.hpp"
 #include "numen/core/step_stages.hpp"
 
 #include "scratch/data_scratch.hpp"
@@ -268,6 +269,22 @@ void build_implicit_system(const Model& model, Data& data) noexcept {
   }
 
   detail::add_grasp_terms(model, data);  // the held bodies' springs
+  // Sliding ties (sliding_tie.hpp): W = β I + α a aᵀ, β = h c + h² k, α = h f − β, and the
+  // anchor's motion over the step, b += h² Gᵀ k P (w − v₀).
+  const int nt = std::clamp(data.num_sliding_ties, 0, kMaxSlidingTies);
+  for (int i = 0; i < nt; ++i) {
+    const SlidingTie& t = data.sliding_ties[static_cast<std::size_t>(i)];
+    if (t.body < 0 || t.body >= static_cast<int>(n) || !s.in_solve[static_cast<std::size_t>(t.body)]) continue;
+    const auto b = static_cast<std::size_t>(t.body);
+    const Vec3 r = data.bodies[b].orientation * t.local_point;
+    const Vec3 dv = t.anchor_velocity - point_velocity(s.twist0[b], r);
+    const Vec3 pull = (h2 * t.stiffness) * (dv - t.axis.dot(dv) * t.axis);
+    s.rhs[b].head<3>() += pull;
+    s.rhs[b].tail<3>() += r.cross(pull);
+    const double beta = h * t.damping + h2 * t.stiffness;
+    add_contact_terms(h * t.friction - beta, beta, 0.0, t.axis, r, s.block[b], s.rhs[b],
+                      s.isotropic_moments[b]);
+  }
   if constexpr (kWithDeformable)
     add_net_body_terms(model, data);  // ties and node contacts of the deformable nets
   for (std::size_t i = 0; i < n; ++i) {

@@ -18,6 +18,7 @@
 #include "numen/core/net_collision.hpp"
 #include "numen/core/net_forces.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/sliding_tie.hpp"
 #include "numen/core/step_stages.hpp"
 #include "numen/core/thread.hpp"
 
@@ -79,6 +80,7 @@ void compute_forces(const Model& model, Data& data) noexcept {
   apply_coupling(model, data);
   compute_contact_forces(model, data);
   apply_grasp_forces(model, data);
+  apply_sliding_ties(model, data);
   data.stages_run |= kStageBodyForces;
   if (model.stage_plan & kStageThreads) step_threads(model, data);  // sets its bit; body reactions
   if constexpr (kWithDeformable) {

@@ -17,6 +17,7 @@
 #include "numen/core/joint.hpp"
 #include "numen/core/needle_puncture.hpp"
 #include "numen/core/net_state.hpp"
+#include "numen/core/sliding_tie.hpp"
 #include "numen/core/thread.hpp"
 #include "numen/core/types.hpp"
 
@@ -133,6 +134,11 @@ struct Data {
   /// Per body: its own device target (Eq. 6) besides the held body's
   /// `target`. An enabled entry of the held body itself is ignored.
   std::vector<BodyTarget> body_targets;
+  /// Points of bodies held on moving lines of the world (sliding_tie.hpp), [0, num_sliding_ties):
+  /// the caller's, before each step (the multirate device loop writes a held needle's puncture
+  /// ties here); each one's force at the step's start is written back (SlidingTie::force).
+  std::array<SlidingTie, kMaxSlidingTies> sliding_ties{};
+  int num_sliding_ties = 0;
   /// Per body, ≥ 0: the device whose feedback the body's Eq. 8 wrench is (compute_feedback()):
   /// with a body held, the wrenches of one group's bodies are saturated as one composite (their
   /// Eq. 9 sum), each group on its own, so that one device's load never scales another's
