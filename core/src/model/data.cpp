@@ -15,6 +15,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/step_outputs.hpp"
 #include "numen/core/step_stages.hpp"
+#include "model/node_contact_copy.hpp"
 
 namespace numen::core {
 namespace {
@@ -208,11 +209,9 @@ void copy_all_but_joints(const From& from, StepOutputs& to) noexcept {
   to.max_joint_drift = from.max_joint_drift;
   to.max_joint_angle_drift = from.max_joint_angle_drift;
   std::copy_n(from.nodes.begin(), std::min(to.nodes.size(), from.nodes.size()), to.nodes.begin());
-  to.num_node_contacts =
-      std::clamp(from.num_node_contacts, 0,
-                 static_cast<int>(std::min(to.node_contacts.size(), from.node_contacts.size())));
-  std::copy_n(from.node_contacts.begin(), to.num_node_contacts, to.node_contacts.begin());
+  detail::copy_node_contacts(from, to);
   std::copy_n(from.nets.begin(), std::min(to.nets.size(), from.nets.size()), to.nets.begin());
+  std::copy_n(from.needles.begin(), std::min(to.needles.size(), from.needles.size()), to.needles.begin());
 }
 
 }  // namespace
@@ -224,6 +223,7 @@ StepOutputs make_step_outputs(const Data& data, std::size_t num_joints) {
   o.nodes = data.nodes;
   o.node_contacts.assign(data.node_contacts.size(), NodeContact{});
   o.nets = data.nets;
+  o.needles = data.needles;
   return o;
 }
 

@@ -15,6 +15,7 @@
 #include "numen/core/features.hpp"
 #include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/needle.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
 
@@ -168,6 +169,10 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
         s.scene_joints.push_back(static_cast<int>(j));
       }
     s.scene_model.joints = std::move(kept);
+    // A needle the device loop steps: its tip's contacts are the device loop's, and so is the
+    // puncture test (test_punctures(), make_requested_punctures()).
+    for (NeedleModel& n : s.scene_model.needles)
+      n.puncture_on_request = s.device_body[static_cast<std::size_t>(n.body)] >= 0;
     error = detail::finalize_scene_loop_model(s.scene_model, s.bodies);
     if (!error.empty()) throw std::invalid_argument("multirate: scene-loop model: " + error);
     s.fold_model = fold_model_of(s.scene_model, fold_substeps_, s.bodies);
@@ -220,6 +225,8 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
     node_force_.assign(kMaxContactPlanes, Vec3::Zero());
     plane_springs_.assign(scene.node_springs.size(), 0);
   }
+  puncture_requests_.assign(scene.needles.size(), 0.0);
+  tip_forces_.assign(scene.needles.size(), 0.0);
   report_ = make_report();
   scene_report_ = make_scene_report();
 }
@@ -229,6 +236,7 @@ MultirateDeviceReport MultirateGodObject::make_report() const {
   r.impulse_total.assign(impulse_total_.size(), Wrench{});
   r.states.assign(released_states_.size(), BodyState{});
   r.released_states.assign(released_states_.size(), BodyState{});
+  r.puncture_requests.assign(puncture_requests_.size(), 0.0);
   write_report(r);
   return r;
 }
@@ -302,6 +310,7 @@ bool MultirateGodObject::select(int body) noexcept {
   planes_.count = 0;
   planes_.carrier_count = 0;
   planes_.link_count = 0;
+  planes_.tie_count = 0;
   period_ = 0;  // one thread: a scene period now, the new god-object's planes
   ++switches_;
   ++counters_.switches;
@@ -321,6 +330,8 @@ void MultirateGodObject::write_report(MultirateDeviceReport& out) const noexcept
   out.released_body = released_body_;
   for (std::size_t i = 0; i < out.released_states.size() && i < released_states_.size(); ++i)
     out.released_states[i] = released_states_[i];
+  std::copy_n(puncture_requests_.begin(), std::min(puncture_requests_.size(), out.puncture_requests.size()),
+              out.puncture_requests.begin());
 }
 
 bool MultirateGodObject::take_scene_report(const MultirateSceneReport& m) noexcept {
@@ -333,6 +344,8 @@ bool MultirateGodObject::take_scene_report(const MultirateSceneReport& m) noexce
   std::copy_n(m.planes.carriers.begin(), planes_.carrier_count, planes_.carriers.begin());
   planes_.link_count = std::clamp(m.planes.link_count, 0, kMaxCarrierLinks);
   std::copy_n(m.planes.links.begin(), planes_.link_count, planes_.links.begin());
+  planes_.tie_count = std::clamp(m.planes.tie_count, 0, kMaxPunctureTies);
+  std::copy_n(m.planes.ties.begin(), planes_.tie_count, planes_.ties.begin());
   periods_since_model_ = 0;
   return true;
 }
@@ -371,10 +384,47 @@ void MultirateGodObject::device_step(const MultirateSceneReport* fresh) noexcept
     if (periods_since_model_ >= ratio_) ++counters_.stale_models;
     step_god_object(device_model(), planes_, slot().device);
     hand_back();
+    test_punctures();
   }
   ++periods_since_model_;
   ++counters_.device_steps;
   ++period_;
+}
+
+void MultirateGodObject::test_punctures() noexcept {
+  if constexpr (!kWithDeformable) return;
+  const Model& scene = free_scene_model_;  // the scene's needles, with their scene bodies
+  for (std::size_t k = 0; k < scene.needles.size() && k < puncture_requests_.size(); ++k) {
+    const NeedleModel& n = scene.needles[k];
+    double& request = puncture_requests_[k];
+    tip_forces_[k] = 0.0;
+    const int local = slot_ >= 0 ? slot().device_body[static_cast<std::size_t>(n.body)] : -1;
+    if (local < 0 || k >= snapshot_.needles.size() || snapshot_.needles[k].num_punctures > 0) {
+      request = 0.0;  // not the device loop's, or made: the scene loop's passage now
+      continue;
+    }
+    const Data& d = slot().device;
+    const BodyState& b = d.bodies[static_cast<std::size_t>(local)];
+    const Vec3 t = b.orientation * needle_tangent(n, n.length());
+    const double cos_max = std::cos(n.puncture_max_angle);
+    Vec3 force = Vec3::Zero();  // on the needle
+    bool facing = false;
+    const int nc = std::clamp(d.num_contacts, 0, kMaxContacts);
+    for (int i = 0; i < nc; ++i) {
+      const Contact& c = d.contacts[static_cast<std::size_t>(i)];
+      if (c.body_b >= 0 || c.body_a != local || c.sphere_b < 0 || c.sphere_b >= planes_.count) continue;
+      const ContactPlane& p = planes_.planes[static_cast<std::size_t>(c.sphere_b)];
+      if (p.node < 0 || p.sphere < n.sphere_count - 3) continue;  // tissue on the tip's spheres
+      force += c.force;
+      facing = facing || (-c.normal).dot(t) >= cos_max;
+    }
+    tip_forces_[k] = -force.dot(t);
+    if (request > 0.0) {  // latched until made, unless the tip eased off
+      if (tip_forces_[k] < n.puncture_force) request = 0.0;
+    } else if (tip_forces_[k] >= n.puncture_force && facing) {
+      request = tip_forces_[k];
+    }
+  }
 }
 
 void MultirateGodObject::step() noexcept {
@@ -423,8 +473,13 @@ void MultirateGodObject::view(Data& out) const noexcept {
     out.contacts[static_cast<std::size_t>(count++)] = c;
     deepest = std::max(deepest, c.depth);
   }
-  // The nets, the god-object's included, as the scene loop left them.
+  // The nets, the god-object's included, and the needles' passages, as the scene loop left them.
   detail::copy_nets(snap, out);
+  std::copy_n(snap.needles.begin(), std::min(snap.needles.size(), out.needles.size()), out.needles.begin());
+  for (std::size_t k = 0; k < out.needles.size() && k < tip_forces_.size(); ++k)  // the rendered one
+    if (slot_ >= 0 && k < free_scene_model_.needles.size() &&
+        slot().device_body[static_cast<std::size_t>(free_scene_model_.needles[k].body)] >= 0)
+      out.needles[k].tip_force = tip_forces_[k];
   for (int i = 0; i < out.num_node_contacts; ++i)
     deepest = std::max(deepest, out.node_contacts[static_cast<std::size_t>(i)].depth);
   for (const NetOutput& o : out.nets)

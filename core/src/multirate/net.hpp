@@ -13,6 +13,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/multirate/planes.hpp"
+#include "model/node_contact_copy.hpp"
 
 namespace numen::core::detail {
 
@@ -63,9 +64,7 @@ bool organ_surface_folded(const Model& scene, const Data& data) noexcept;
 template <typename From, typename To>
 void copy_nets(const From& from, To& to) noexcept {
   std::copy_n(from.nodes.begin(), std::min(to.nodes.size(), from.nodes.size()), to.nodes.begin());
-  to.num_node_contacts = std::clamp(
-      from.num_node_contacts, 0, static_cast<int>(std::min(to.node_contacts.size(), from.node_contacts.size())));
-  std::copy_n(from.node_contacts.begin(), to.num_node_contacts, to.node_contacts.begin());
+  detail::copy_node_contacts(from, to);
   std::copy_n(from.nets.begin(), std::min(to.nets.size(), from.nets.size()), to.nets.begin());
 }
 

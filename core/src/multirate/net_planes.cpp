@@ -50,7 +50,7 @@ void build_tissue_planes(const Model& scene, Data& data, std::span<const int> de
     ContactPlane& p = out.planes[static_cast<std::size_t>(out.count++)];
     p = ContactPlane{};  // the set is reused
     p.body = device_body[static_cast<std::size_t>(c.body_b)];
-    p.sphere = -1;
+    p.sphere = c.sphere_b - scene.bodies[static_cast<std::size_t>(c.body_b)].sphere_begin;
     p.node = c.node;
     p.local_point = sp.center;
     p.radius = sp.radius - margin;
@@ -161,6 +161,7 @@ int add_node_contact_planes(const Model& scene, const Data& data, std::span<cons
     if (organ) {  // on the god-object's (grown) sphere; normal from the node to it
       const Sphere& sp = scene.body_spheres[static_cast<std::size_t>(c.sphere_b)];
       p.body = device_body[static_cast<std::size_t>(c.body_b)];
+      p.sphere = c.sphere_b - scene.bodies[static_cast<std::size_t>(c.body_b)].sphere_begin;
       p.local_point = sp.center;
       p.radius = sp.radius - margin;
       p.normal = -c.normal;

@@ -6,12 +6,14 @@
 #include "numen/core/multirate/god_object.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "numen/core/collision.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/features.hpp"
 #include "numen/core/model.hpp"
+#include "numen/core/needle.hpp"
 #include "numen/core/net_collision.hpp"
 #include "numen/core/rigid_body.hpp"
 #include "numen/core/step.hpp"
@@ -20,6 +22,7 @@
 #include "scratch/data_scratch.hpp"
 #include "multirate/contact.hpp"
 #include "multirate/net.hpp"
+#include "needle/needle_passage.hpp"
 #include "numen/core/multirate/planes.hpp"
 
 namespace numen::core {
@@ -72,6 +75,9 @@ void detect_and_build_planes(const Model& model, Data& data, const SampleContext
   if constexpr (kWithDeformable) {
     if (c->node_planes) {
       detect_node_contacts(model, data);
+      // No plane on a needle's part inside the tissue: its puncture ties hold it (PunctureTie).
+      // Dropped first: a needle inside is not a sphere past the surface.
+      if (!model.needles.empty()) detail::drop_needles_inside_contacts(model, data);
       detail::drop_back_face_contacts(model, data, c->device_body, c->margin);
       detail::build_node_planes(model, data, c->device_body, c->margin, c->node_scratch, *c->planes);
       // The look-ahead where the net steps slower than the device loop (at a rate ratio of 1
@@ -107,6 +113,7 @@ void MultirateGodObject::scene_step(const MultirateDeviceReport& in, MultirateSc
   apply_owed(h);                              // 2. what each body is owed, as its wrench
   const SceneStepOutcome stepped = step_scene(in, body, out);  // 3., 4. the step, its impulses
   settle_after_step(in, stepped, h);          //    the rest owed, the wrenches, the god-object
+  make_requested_punctures(in);               //    the punctures the device loop found
   write_scene_report(in, body, out);           //    the report for the device loop
 }
 
@@ -305,6 +312,8 @@ void MultirateGodObject::write_scene_report(const MultirateDeviceReport& in, int
   // The model: the planes (the step's contact stage), the tools' states, the snapshot of the scene.
   out.body = body;
   out.sample_period = in.period;
+  drop_passage_planes(out.planes);
+  write_puncture_ties(out.planes);
   const std::vector<int>& scene_joints =
       scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_joints : free_joints_;
   const std::span<const int> device_body = scene_device_body();
@@ -320,6 +329,80 @@ void MultirateGodObject::write_scene_report(const MultirateDeviceReport& in, int
     snap.contacts[static_cast<std::size_t>(count++)] = c;
   }
   snap.num_contacts = count;
+}
+
+void MultirateGodObject::make_requested_punctures(const MultirateDeviceReport& in) noexcept {
+  if constexpr (!kWithDeformable) return;
+  const Model& model = scene_model();
+  for (std::size_t k = 0; k < model.needles.size() && k < in.puncture_requests.size(); ++k)
+    if (in.puncture_requests[k] > 0.0 && model.needles[k].puncture_on_request)
+      detail::puncture_on_request(model, *scene_, static_cast<int>(k), in.puncture_requests[k]);
+}
+
+void MultirateGodObject::drop_passage_planes(ContactPlaneSet& planes) const noexcept {
+  if constexpr (!kWithDeformable) return;
+  const Model& model = scene_model();
+  const std::span<const int> device_body = scene_device_body();
+  for (std::size_t k = 0; k < model.needles.size() && k < scene_->needles.size(); ++k) {
+    const NeedleModel& n = model.needles[k];
+    const NeedleState& st = scene_->needles[k];
+    if (st.num_punctures <= 0 || !in_god_object(device_body, n.body)) continue;
+    const int local = device_body[static_cast<std::size_t>(n.body)];
+    const auto tied = [&](int node) noexcept {
+      for (int i = 0; i < st.num_punctures; ++i) {
+        const int face = st.punctures[static_cast<std::size_t>(i)].face;
+        if (face < 0 || face >= static_cast<int>(model.net_faces.size())) continue;
+        for (int v : model.net_faces[static_cast<std::size_t>(face)])
+          if (v == node) return true;
+      }
+      return false;
+    };
+    int kept = 0;
+    const int count = std::clamp(planes.count, 0, kMaxContactPlanes);
+    for (int i = 0; i < count; ++i) {
+      const ContactPlane& p = planes.planes[static_cast<std::size_t>(i)];
+      if (p.node >= 0 && p.body == local &&
+          ((p.sphere >= 0 && detail::needle_sphere_inside(n, st, p.sphere)) || tied(p.node)))
+        continue;
+      planes.planes[static_cast<std::size_t>(kept++)] = p;
+    }
+    planes.count = kept;
+  }
+}
+
+void MultirateGodObject::write_puncture_ties(ContactPlaneSet& out) const noexcept {
+  out.tie_count = 0;
+  if constexpr (!kWithDeformable) return;
+  const Model& model = scene_model();
+  const std::span<const int> device_body = scene_device_body();
+  for (std::size_t k = 0; k < model.needles.size() && k < scene_->needles.size(); ++k) {
+    const NeedleModel& n = model.needles[k];
+    if (!in_god_object(device_body, n.body)) continue;  // a needle of the scene loop's own
+    const NeedleState& st = scene_->needles[k];
+    for (int i = 0; i < st.num_punctures && out.tie_count < kMaxPunctureTies; ++i) {
+      const NeedlePuncture& p = st.punctures[static_cast<std::size_t>(i)];
+      if (p.face < 0 || p.face >= static_cast<int>(model.net_faces.size())) continue;
+      const std::array<int, 3>& v = model.net_faces[static_cast<std::size_t>(p.face)];
+      PunctureTie& t = out.ties[static_cast<std::size_t>(out.tie_count++)];
+      t.body = device_body[static_cast<std::size_t>(n.body)];
+      t.radius = n.radius;
+      t.centre = n.centre;
+      t.tail_angle = n.tail_angle;
+      t.tip_angle = n.tip_angle;
+      t.wire_radius = n.wire_radius;
+      t.anchor.setZero();
+      t.velocity.setZero();
+      for (int j = 0; j < 3; ++j) {  // the material point at the step's end
+        const NodeState& node = scene_->nodes[static_cast<std::size_t>(v[static_cast<std::size_t>(j)])];
+        t.anchor += p.weights[j] * node.position;
+        t.velocity += p.weights[j] * node.velocity;
+      }
+      t.stiffness = n.tie_stiffness;
+      t.damping = n.tie_damping;
+      t.friction = n.friction;
+      t.force.setZero();
+    }
+  }
 }
 
 }  // namespace numen::core

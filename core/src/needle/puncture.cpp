@@ -13,6 +13,7 @@
 #include "numen/core/step_stages.hpp"
 
 #include "contact/collision_query.hpp"
+#include "needle/needle_passage.hpp"
 #include "net/net_terms.hpp"
 #include "scratch/data_scratch.hpp"
 
@@ -238,10 +239,6 @@ void write_tie_springs(const Model& model, Data& data, const NeedleModel& n, con
 /// s_entry = 0 once the entry is let go at the tail) and that net, keeping the order of the rest
 /// (the grasp springs after them included).
 void drop_inside_contacts(const Model& model, Data& data, const NeedleModel& n, const NeedleState& st) noexcept {
-  const NeedlePuncture* entry = entry_point(st);
-  const NeedlePuncture* exit = exit_point(st);
-  const double lo = entry != nullptr ? entry->arc_parameter - 2.0 * n.wire_radius : -1.0;
-  const double hi = exit != nullptr ? exit->arc_parameter + 2.0 * n.wire_radius : n.length() + 1.0;
   const int net = st.punctures[0].net;
   const int total = std::clamp(data.num_node_contacts + data.num_node_grasp_springs, 0,
                                static_cast<int>(data.node_contacts.size()));
@@ -250,10 +247,20 @@ void drop_inside_contacts(const Model& model, Data& data, const NeedleModel& n, 
     if (c.held || c.body_b != n.body || c.sphere_b < n.sphere_begin || c.sphere_b >= n.sphere_begin + n.sphere_count ||
         model.node_net[static_cast<std::size_t>(c.node)] != net)
       return false;
-    const double s = sphere_parameter(n, c.sphere_b - n.sphere_begin);
-    return s >= lo && s <= hi;
+    return detail::needle_sphere_inside(n, st, c.sphere_b - n.sphere_begin);
   });
   data.num_node_contacts -= static_cast<int>((first + total) - last);
+}
+
+/// Whether a node contact is one of needle `n`'s tip's (its spheres within 2 r_w of the tip).
+struct TipContact {
+  int body, first, end;
+  bool operator()(const NodeContact& ct) const noexcept {
+    return !ct.held && ct.body_b == body && ct.sphere_b >= first && ct.sphere_b < end;
+  }
+};
+TipContact tip_contact(const NeedleModel& n) noexcept {
+  return {n.body, n.sphere_begin + std::max(0, n.sphere_count - 3), n.sphere_begin + n.sphere_count};
 }
 
 /// The tissue giving way at the threshold within the puncture's step (find_punctures()): each
@@ -263,8 +270,7 @@ void drop_inside_contacts(const Model& model, Data& data, const NeedleModel& n, 
 /// added both: a needle is sharp, so even an organ given by its material meets it with the pair's
 /// penalty on the node alone, no load patch), its Jacobian coefficients scaled alike — and
 /// tip_force set to F_p.
-template <class AtTip>
-void give_way_at_threshold(Data& data, const NeedleModel& n, NeedleState& st, const AtTip& at_tip,
+void give_way_at_threshold(Data& data, const NeedleModel& n, NeedleState& st, const TipContact& at_tip,
                            int nc) noexcept {
   if (!(st.tip_force > n.puncture_force)) return;
   const double a = n.puncture_force / st.tip_force;
@@ -283,6 +289,43 @@ void give_way_at_threshold(Data& data, const NeedleModel& n, NeedleState& st, co
     ct.friction *= a;
   }
   st.tip_force = n.puncture_force;
+}
+
+/// The entry of needle `n` (state `st`, not in a passage) at the deepest triangle its tip goes
+/// into, not along or out of: its tangent within puncture_max_angle of the triangle's inward
+/// normal (where two faces meet, a box's edge, the tip touches both and the side's contact may be
+/// the deeper; it cannot be punctured from above, the top can). Of the first `nc` node contacts
+/// (`at_tip`'s). The event, the time and the count; false, changing nothing, without such a
+/// triangle.
+bool enter_at_tip(const Model& model, const Data& data, const NeedleModel& n, NeedleState& st,
+                  const TipContact& at_tip, int nc) noexcept {
+  const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
+  const Vec3 t = b.orientation * needle_tangent(n, n.length());
+  const double cos_max = std::cos(n.puncture_max_angle);
+  int deepest = -1;
+  for (int c = 0; c < nc; ++c) {
+    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
+    if (!at_tip(ct) || ct.face < 0 ||
+        (deepest >= 0 && !(ct.depth > data.node_contacts[static_cast<std::size_t>(deepest)].depth)))
+      continue;
+    if (-face_normal(model, data, ct.face).dot(t) >= cos_max) deepest = c;
+  }
+  if (deepest < 0) return false;
+  const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(deepest)];
+  NeedlePuncture& p = st.punctures[0];
+  p = NeedlePuncture{};
+  p.net = model.node_net[static_cast<std::size_t>(ct.node)];
+  p.face = ct.face;
+  p.weights = ct.face_weights;
+  p.arc_parameter = n.length();
+  p.position = face_point(model, data, p.face, p.weights, false);
+  p.tangent = t;
+  p.friction = n.friction;
+  st.num_punctures = 1;
+  st.event = PunctureEvent::kPuncture;
+  st.puncture_time = data.time;
+  ++st.punctures_made;
+  return true;
 }
 
 }  // namespace
@@ -322,55 +365,53 @@ void tie_needles(const Model& model, Data& data) noexcept {
       write_tie_springs(model, data, model.needles[k], data.needles[k].punctures[static_cast<std::size_t>(i)]);
 }
 
+bool detail::needle_sphere_inside(const NeedleModel& n, const NeedleState& st, int sphere) noexcept {
+  if (st.num_punctures <= 0) return false;
+  const NeedlePuncture* entry = entry_point(st);
+  const NeedlePuncture* exit = exit_point(st);
+  const double lo = entry != nullptr ? entry->arc_parameter - 2.0 * n.wire_radius : -1.0;
+  const double hi = exit != nullptr ? exit->arc_parameter + 2.0 * n.wire_radius : n.length() + 1.0;
+  const double s = sphere_parameter(n, sphere);
+  return s >= lo && s <= hi;
+}
+
+void detail::drop_needles_inside_contacts(const Model& model, Data& data) noexcept {
+  for (std::size_t k = 0; k < model.needles.size() && k < data.needles.size(); ++k)
+    if (data.needles[k].num_punctures > 0) drop_inside_contacts(model, data, model.needles[k], data.needles[k]);
+}
+
 void find_punctures(const Model& model, Data& data) noexcept {
   data.stages_run |= kStageNeedles;
   const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
   for (std::size_t k = 0; k < model.needles.size(); ++k) {
     const NeedleModel& n = model.needles[k];
     NeedleState& st = data.needles[k];
-    const int tip_first = n.sphere_begin + std::max(0, n.sphere_count - 3);  // within 2 r_w of the tip
-    const int end = n.sphere_begin + n.sphere_count;
     const BodyState& b = data.bodies[static_cast<std::size_t>(n.body)];
     const Vec3 t = b.orientation * needle_tangent(n, n.length());
-    const auto at_tip = [&](const NodeContact& ct) {
-      return !ct.held && ct.body_b == n.body && ct.sphere_b >= tip_first && ct.sphere_b < end;
-    };
+    const TipContact at_tip = tip_contact(n);
     Vec3 force = Vec3::Zero();  // on the needle
     for (int c = 0; c < nc; ++c)
       if (const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)]; at_tip(ct)) force -= ct.force;
     st.tip_force = -force.dot(t);
-    if (st.num_punctures > 0 || !(st.tip_force >= n.puncture_force)) continue;
-    // The deepest triangle the tip goes into, not along or out of: the tangent within the angle
-    // of its inward normal. Where two faces meet (a box's edge) the tip touches both, and the
-    // side's contact may be the deeper; it cannot be punctured from above, the top can.
-    const double cos_max = std::cos(n.puncture_max_angle);
-    int deepest = -1;
-    for (int c = 0; c < nc; ++c) {
-      const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(c)];
-      if (!at_tip(ct) || ct.face < 0 ||
-          (deepest >= 0 && !(ct.depth > data.node_contacts[static_cast<std::size_t>(deepest)].depth)))
-        continue;
-      if (-face_normal(model, data, ct.face).dot(t) >= cos_max) deepest = c;
-    }
-    if (deepest < 0) continue;
-    const NodeContact& ct = data.node_contacts[static_cast<std::size_t>(deepest)];
-    NeedlePuncture& p = st.punctures[0];
-    p = NeedlePuncture{};
-    p.net = model.node_net[static_cast<std::size_t>(ct.node)];
-    p.face = ct.face;
-    p.weights = ct.face_weights;
-    p.arc_parameter = n.length();
-    p.position = face_point(model, data, p.face, p.weights, false);
-    p.tangent = t;
-    p.friction = n.friction;
-    st.num_punctures = 1;
-    st.event = PunctureEvent::kPuncture;
+    if (st.num_punctures > 0 || n.puncture_on_request || !(st.tip_force >= n.puncture_force)) continue;
+    if (!enter_at_tip(model, data, n, st, at_tip, nc)) continue;
     st.puncture_contact_force = st.tip_force;
     give_way_at_threshold(data, n, st, at_tip, nc);
     st.puncture_tip_force = st.tip_force;
-    st.puncture_time = data.time;
-    ++st.punctures_made;
   }
+}
+
+bool detail::puncture_on_request(const Model& model, Data& data, int needle, double tip_force) noexcept {
+  if (needle < 0 || needle >= model.num_needles() || needle >= static_cast<int>(data.needles.size()))
+    return false;
+  const NeedleModel& n = model.needles[static_cast<std::size_t>(needle)];
+  NeedleState& st = data.needles[static_cast<std::size_t>(needle)];
+  if (st.num_punctures > 0) return false;
+  const int nc = std::clamp(data.num_node_contacts, 0, static_cast<int>(data.node_contacts.size()));
+  if (!enter_at_tip(model, data, n, st, tip_contact(n), nc)) return false;
+  st.puncture_contact_force = tip_force;
+  st.puncture_tip_force = tip_force;
+  return true;
 }
 
 void stop_needle_tunnels(const Model& model, Data& data) noexcept {

@@ -610,12 +610,8 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
   if (root.table("multirate")) {
-    // The needles' and threads' stages run in the single-rate step: a multirate run would neither
-    // puncture (the god-object's model has no needle) nor report or draw a thread (its state is
-    // the scene loop's, not in the run's view of both loops).
-    for (const TomlTable& n : root.tables("needle"))
-      n.fail("name", "needles run in the single-rate step: a scene with [multirate] has no needle yet "
-                     "(docs/suturing.md, \"What is left\")");
+    // A thread runs in the single-rate step: a multirate run would not hand its pull on the
+    // needle or the jaws to the device loop (docs/multirate.md, "What is left").
     for (const TomlTable& t : root.tables("thread"))
       t.fail("name", "threads run in the single-rate step: a scene with [multirate] has no thread yet "
                      "(docs/thread.md, \"Limits\")");

@@ -75,6 +75,11 @@ struct NeedleModel {
   double tie_stiffness = 1000.0;   ///< NeedleSpec::tie_stiffness (N/m).
   double tie_damping = 1.0;        ///< NeedleSpec::tie_damping (N·s/m).
   double friction = 2.0;           ///< NeedleSpec::friction (N·s/m).
+  /// The puncture test is another's: find_punctures() measures NeedleState::tip_force but does not
+  /// puncture, detail::puncture_on_request() does. Set in the multirate scene loop's models for a
+  /// needle the device loop steps, whose tip's contacts the device loop renders and tests
+  /// (docs/multirate.md, "A needle in the device loop"); false otherwise.
+  bool puncture_on_request = false;
   double length() const noexcept { return radius * arc_angle; }  ///< L = R φ (m).
 };
 

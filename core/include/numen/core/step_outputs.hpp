@@ -19,8 +19,8 @@
 namespace numen::core {
 
 /// A Data's bodies, joints and net nodes, and what its step wrote: contacts, their counters,
-/// status, solver figures, joint drift, node contacts and the nets' outputs (the fields of
-/// Data of the same names).
+/// status, solver figures, joint drift, node contacts, the nets' outputs and the needles'
+/// passages (the fields of Data of the same names).
 struct StepOutputs {
   std::vector<BodyState> bodies;
   std::vector<JointState> joints;
@@ -41,12 +41,18 @@ struct StepOutputs {
   double max_joint_drift = 0.0;
   double max_joint_angle_drift = 0.0;
   std::vector<NodeState> nodes;
-  std::vector<NodeContact> node_contacts;  ///< [0, num_node_contacts) valid.
+  /// [0, num_node_contacts) valid, then the held node springs (the grasps', the needles' ties,
+  /// the threads' eyelets: Data::num_node_grasp_springs and the rest), as in Data.
+  std::vector<NodeContact> node_contacts;
   int num_node_contacts = 0;
+  int num_node_grasp_springs = 0;
+  int num_node_needle_ties = 0;
+  int num_node_thread_ties = 0;
   std::vector<NetOutput> nets;
+  std::vector<NeedleState> needles;  ///< Per needle (Model::needles): its passage (needle_puncture.hpp).
 };
 
-/// A StepOutputs sized for `data` with `num_joints` joints: its bodies, nodes and nets copied
+/// A StepOutputs sized for `data` with `num_joints` joints: its bodies, nodes, nets and needles copied
 /// from `data`, its joints, node contacts (as many as `data` has room for) and the rest zero.
 /// Load time: allocates.
 StepOutputs make_step_outputs(const Data& data, std::size_t num_joints);

@@ -30,6 +30,11 @@ struct MultirateDeviceReport {
   std::int64_t switches = 0;  ///< select() calls that changed the god-object so far.
   int released_body = -1;     ///< The held body the last switch released (−1: none).
   std::vector<BodyState> released_states;  ///< Its god-object's bodies' states at the switch.
+  /// Per needle (Model::needles): > 0 when the device loop found the needle's tip pressing on
+  /// the tissue's planes by its puncture force along its tangent (the force then, N; latched
+  /// until the scene loop makes the puncture, or withdrawn when the force falls back below it),
+  /// 0 otherwise (docs/multirate.md, "A needle in the device loop").
+  std::vector<double> puncture_requests;
 };
 
 /// What the scene loop hands the device loop (MultirateGodObject::scene_step()), its report: the

@@ -283,6 +283,21 @@ class MultirateGodObject {
   /// and the snapshot of the scene (writes counters_, out.body, out.sample_period, out.scene).
   void write_scene_report(const MultirateDeviceReport& in, int body,
                           MultirateSceneReport& out) noexcept;
+  /// Device loop: each needle of the god-object's tip force along its tangent on the planes this
+  /// period, and its puncture request (MultirateDeviceReport::puncture_requests) set, kept or
+  /// withdrawn (writes tip_forces_, puncture_requests_).
+  void test_punctures() noexcept;
+  /// Scene loop: the punctures the device loop asked for in `in`, made on the scene Data
+  /// (detail::puncture_on_request(); writes its needles).
+  void make_requested_punctures(const MultirateDeviceReport& in) noexcept;
+  /// Scene loop: the node planes of each needle of the god-object in a passage that its puncture
+  /// ties stand for, removed from `planes`: those on its part inside the tissue (built at the
+  /// step's start, before a puncture the step made) and those of the nodes its points are tied
+  /// to (whose push on the needle is the tie's) (writes planes.planes, planes.count).
+  void drop_passage_planes(ContactPlaneSet& planes) const noexcept;
+  /// The puncture ties of the needles of the god-object (PunctureTie) from the scene Data's
+  /// passages, their material points at the step's end (writes out.ties, out.tie_count).
+  void write_puncture_ties(ContactPlaneSet& out) const noexcept;
   /// The scene loop's current god-object: its bodies (scene indices; empty without one).
   std::span<const int> scene_god() const noexcept;
   /// ... per scene body its god-object model index or −1 (empty without one).
@@ -309,6 +324,8 @@ class MultirateGodObject {
   int released_body_ = -1;
   std::vector<BodyState> released_states_;
   bool took_model_ = false;       // the last device period took a new model
+  std::vector<double> puncture_requests_;  // per needle (MultirateDeviceReport::puncture_requests)
+  std::vector<double> tip_forces_;         // per needle: the tip's force along it on the planes (N)
   // Scene loop.
   Data free_scene_;               // the scene loop's Data while nothing is held
   std::vector<int> free_joints_;  // identity: the free model's joints are the scene's

@@ -72,7 +72,10 @@ struct PlaneCarrier {
 /// (Contact::surface_velocity).
 struct ContactPlane {
   int body = 0;             ///< The god-object model's body the plane acts on.
-  int sphere = -1;          ///< Its sphere (index from the body's first).
+  /// Its sphere (index from the body's first); for an organ's node plane the god-object's
+  /// sphere the node touches (which `local_point` and `radius` stand for); −1 for a node plane of
+  /// a net on the god-object.
+  int sphere = -1;
   Vec3 point = Vec3::Zero();     ///< A point of the plane at the sample (m, world).
   Vec3 normal = Vec3::UnitZ();   ///< Unit normal out of the other side, towards the god-object.
   Vec3 velocity = Vec3::Zero();  ///< Velocity of that point at the sample (m/s, world).
@@ -134,15 +137,49 @@ struct CarrierLink {
   Mat3 damping = Mat3::Zero();    ///< γ ê êᵀ (N·s/m).
 };
 
-/// The planes of one scene sample, [0, count) valid, their carriers, [0, carrier_count), and the
-/// springs between node carriers, [0, link_count); `dropped` counts contacts beyond the room.
+/// Room for the puncture ties of one sample (PunctureTie): two points of each of four needles.
+inline constexpr int kMaxPunctureTies = 8;
+
+/// A needle's puncture point of the scene loop's tissue, as the device loop holds the needle on it
+/// (docs/multirate.md, "A needle in the device loop"): the material point (the punctured
+/// triangle's point at its barycentric weights) at the sample and its velocity, carried on at that
+/// velocity between samples, and the needle's arc; each device period the needle's closest arc
+/// point is held on the line through the material point along the arc's tangent there by a
+/// SlidingTie of the needle's tie (NeedleModel::tie_stiffness, tie_damping across, friction
+/// along: the single-rate tie, needle_puncture.hpp), stepped implicitly with the god-object; no
+/// force where the point has passed off the arc (behind the tail, or more than 4 r_w past the
+/// tip: the scene loop lets it go at its next sample). The tie's reaction on the tissue is the
+/// scene loop's own tie, on its nodes against the imposed needle (as a node plane's contact is
+/// the scene step's own).
+struct PunctureTie {
+  int body = -1;                       ///< The needle's body in the god-object model.
+  double radius = 0.0;                 ///< The arc: NeedleModel::radius (m),
+  Vec3 centre = Vec3::Zero();          ///< ... centre (m, body frame),
+  double tail_angle = 0.0;             ///< ... tail_angle and tip_angle (rad),
+  double tip_angle = 0.0;
+  double wire_radius = 0.0;            ///< ... wire_radius (m).
+  Vec3 anchor = Vec3::Zero();          ///< The material point (m, world): at the sample, then carried.
+  Vec3 velocity = Vec3::Zero();        ///< Its velocity at the sample (m/s, world).
+  double stiffness = 0.0;              ///< NeedleModel::tie_stiffness (N/m).
+  double damping = 0.0;                ///< NeedleModel::tie_damping (N·s/m).
+  double friction = 0.0;               ///< NeedleModel::friction (N·s/m).
+  /// Written by step_god_object(): the tie's force on the needle at the last device period's
+  /// start (N, world; SlidingTie::force), zero where the point was off the arc.
+  Vec3 force = Vec3::Zero();
+};
+
+/// The planes of one scene sample, [0, count) valid, their carriers, [0, carrier_count), the
+/// springs between node carriers, [0, link_count), and the needles' puncture ties,
+/// [0, tie_count); `dropped` counts contacts beyond the room.
 struct ContactPlaneSet {
   std::array<ContactPlane, kMaxContactPlanes> planes{};
   std::array<PlaneCarrier, kMaxPlaneCarriers> carriers{};
   std::array<CarrierLink, kMaxCarrierLinks> links{};
+  std::array<PunctureTie, kMaxPunctureTies> ties{};
   int count = 0;
   int carrier_count = 0;
   int link_count = 0;
+  int tie_count = 0;
   int dropped = 0;
 };
 

@@ -1,0 +1,100 @@
+// Tests of the suturing scene's needle in the device loop of a multirate run (issue 69;
+// docs/multirate.md, "A needle in the device loop"): its first pass at 10 kHz with the scene
+// loop at 1 kHz, against the single-rate run at 10 kHz. The shipped scene without its thread
+// and its drivers' servos (both still single-rate only: docs/multirate.md, "What is left").
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <string>
+
+#include "build_features.hpp"
+#include "sanitizer.hpp"
+#include "scene_text.hpp"
+#include "temp_dir.hpp"
+#include "numen/sim/run/run.hpp"
+#include "numen/sim/run/run_verdict.hpp"
+#include "numen/sim/scene/scene.hpp"
+
+namespace {
+
+using numen::sim::RunSummary;
+
+/// The shipped suturing scene (its DCF paths made absolute) without its [[thread]], its
+/// [device.trajectory.servo] tables and the segments' servo_* keys, at dt = 0.1 ms (the bus's
+/// latency 20 µs and compute phase 50 µs, so that a SYNC round trip fits), and, when
+/// `multirate`, the scene loop at 1 ms with a 2 mm margin.
+std::string suturing_at_ten_kilohertz(bool multirate) {
+  std::istringstream in(numen::test::shipped_scene_text("suturing.toml"));
+  std::string out, line;
+  bool skip = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] == '[')
+      skip = line.rfind("[[thread]]", 0) == 0 || line.rfind("[device.trajectory.servo]", 0) == 0;
+    if (skip || line.rfind("servo_", 0) == 0) continue;
+    if (line == "dt = 0.001") line = "dt = 0.0001";
+    if (line == "latency = 0.0001") line = "latency = 0.00002\ncompute_phase = 0.00005";
+    out += line + "\n";
+  }
+  if (multirate) out += "\n[multirate]\nscene_dt = 0.001\nmargin = 0.002\n";
+  return out;
+}
+
+RunSummary run_first_pass(const numen::test::TempDir& dir, bool multirate) {
+  const numen::sim::Scene scene =
+      numen::sim::load_scene(dir.write(multirate ? "mr.toml" : "sr.toml", suturing_at_ten_kilohertz(multirate)));
+  numen::sim::RunOptions options;
+  options.duration_s = 3.2;  // the first pass: in at 1.39 s, out at 2.72 s
+  return numen::sim::run_scene(scene, options);
+}
+
+}  // namespace
+
+// The right driver holds the needle in its jaws (the grasp in the device step, the needle carried
+// there) and drives it through the pad: the device loop finds the puncture on its tip's planes at
+// the threshold, the scene loop makes it, and the needle goes round on its ties and comes out, as
+// in the single-rate run: the contacts asked within 10 % of the threshold, the entry and the exit
+// (at rest, on the pad) within 0.3 mm of single-rate's, each hand's largest force within 5 %. No
+// tunnel; a clean run.
+TEST(RunMultirateNeedle, TheSuturingScenesFirstPassAsTheSingleRateRun) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  NUMEN_SKIP_UNDER_SANITIZER("two runs of 32 000 periods compare figures, which is not what a "
+                             "sanitizer checks (MultirateNeedle.* runs the same core path)");
+  numen::test::TempDir dir;
+  const RunSummary single = run_first_pass(dir, false);
+  const RunSummary multi = run_first_pass(dir, true);
+  for (const std::string& line : multi.needle_lines) std::printf("[   info   ] multirate: %s\n", line.c_str());
+  for (const std::string& line : single.needle_lines) std::printf("[   info   ] single-rate: %s\n", line.c_str());
+  const numen::sim::RunVerdict v = numen::sim::run_verdict(multi);
+  EXPECT_EQ(v.status, numen::sim::ExitStatus::kClean) << (v.reasons.empty() ? "" : v.reasons.front());
+  EXPECT_EQ(multi.multirate.scene_steps, 3200);
+  ASSERT_EQ(single.needle_runs.size(), 1u);
+  ASSERT_EQ(multi.needle_runs.size(), 1u);
+  const numen::sim::NeedleRunFigures& s = single.needle_runs[0];
+  const numen::sim::NeedleRunFigures& m = multi.needle_runs[0];
+  ASSERT_GE(s.num_passes, 1u);
+  ASSERT_GE(m.num_passes, 1u);
+  EXPECT_EQ(multi.needle_passes, 1) << "through";
+  EXPECT_EQ(m.tunnels, 0);
+  EXPECT_GE(m.puncture_contact_force_n, m.puncture_force_n);
+  EXPECT_LT(m.puncture_contact_force_n, 1.1 * m.puncture_force_n) << "N: within 10 % of the threshold";
+  const auto distance_mm = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    return 1e3 * std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+  };
+  EXPECT_LT(distance_mm(m.passes[0].entry, s.passes[0].entry), 0.3);
+  EXPECT_LT(distance_mm(m.passes[0].exit, s.passes[0].exit), 0.3);
+  EXPECT_NEAR(m.passes[0].entry_s, s.passes[0].entry_s, 0.005);
+  EXPECT_NEAR(m.passes[0].exit_s, s.passes[0].exit_s, 0.02);
+  ASSERT_EQ(multi.devices.size(), 2u);
+  ASSERT_EQ(single.devices.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    std::printf("[   info   ] device %zu: feedback force max %.4f N multirate, %.4f N single-rate\n", i,
+                multi.devices[i].feedback_force_max_n, single.devices[i].feedback_force_max_n);
+    EXPECT_NEAR(multi.devices[i].feedback_force_max_n, single.devices[i].feedback_force_max_n,
+                0.05 * single.devices[i].feedback_force_max_n)
+        << "device " << i;
+  }
+}
