@@ -617,10 +617,6 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                      "(docs/thread.md, \"Limits\")");
   }
   parse_multirate(root, scene);
-  for (const std::optional<ServoDraft>& d : servos)
-    if (d && scene.multirate)
-      d->table.fail("body", "a hand's servo watches the single-rate step's bodies: a scene with "
-                            "[multirate] has no servo yet (docs/suturing.md, \"The drivers' sight\")");
   if (scene.multirate) {
     // The device step grasps bodies only: a net's tissue is the scene loop's.
     const std::vector<TomlTable> grasp_tables = root.tables("grasp");
