@@ -91,13 +91,17 @@ struct MultirateCounters {
 ///      moves, then cuts the god-object's contacts back to its true spheres (depth − δ):
 ///      the scene bodies feel the god-object implicitly, as in the single-rate step;
 ///   4. the impulse those contacts gave each scene body (their effective force over the step,
-///      below) is subtracted from what it is owed; the report's new impulses are added.
+///      below) is subtracted from what it is owed; the report's new impulses are added; the
+///      punctures the device loop asked for are made, and the report carries the planes (less
+///      those a needle's passage stands for) and each passage's puncture ties (docs/multirate.md,
+///      "A needle in the device loop").
 /// One device period:
 ///   5. a new model for the held body, if one came, replaces the planes (their carriers
 ///      restart from the sample);
 ///   6. step_god_object() at dt;
 ///   7. the impulse each plane on a scene body gave the god-object, negated, added to that
-///      body's running total (its moment about the carrier's centre of mass).
+///      body's running total (its moment about the carrier's centre of mass); each needle's tip
+///      tested against its puncture force on its planes (the request in the next report).
 /// The effective force of a contact over a step is what the step applied: for the linearly
 /// implicit Euler F₀ + K h v₁ + D Δv on the contact's relative velocity, for the symplectic
 /// Euler F₀. Momentum: the scene bodies receive what the device loop gave the god-object, the
