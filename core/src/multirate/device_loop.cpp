@@ -11,9 +11,7 @@
 #include "numen/core/data.hpp"
 #include "numen/core/grasp.hpp"
 #include "numen/core/model.hpp"
-#include "numen/core/needle.hpp"
 #include "numen/core/rigid_body.hpp"
-#include "numen/core/sliding_tie.hpp"
 #include "numen/core/step.hpp"
 #include "numen/core/step_stages.hpp"
 
@@ -31,60 +29,6 @@ std::string body_error(const Model& scene, int body) {
   if (body >= 0 && body < scene.num_bodies()) return "";
   return "multirate: god-object body " + std::to_string(body) + " is not a body of the scene (" +
          std::to_string(scene.num_bodies()) + " bodies)";
-}
-
-/// The puncture ties of `planes` as sliding ties of this device period (PunctureTie): each
-/// material point held on the line along the needle's arc tangent at its closest arc point, or
-/// nothing where the point has passed off the arc.
-void write_puncture_ties(const Model& model, ContactPlaneSet& planes, Data& data) noexcept {
-  data.num_sliding_ties = 0;
-  const int nt = std::clamp(planes.tie_count, 0, kMaxPunctureTies);
-  for (int i = 0; i < nt && data.num_sliding_ties < kMaxSlidingTies; ++i) {
-    PunctureTie& p = planes.ties[static_cast<std::size_t>(i)];
-    p.force.setZero();
-    if (p.body < 0 || p.body >= model.num_bodies()) continue;
-    NeedleModel arc;  // the arc's geometry alone (an empty name: no allocation)
-    arc.radius = p.radius;
-    arc.centre = p.centre;
-    arc.tail_angle = p.tail_angle;
-    arc.tip_angle = p.tip_angle;
-    arc.arc_angle = p.tip_angle - p.tail_angle;
-    arc.wire_radius = p.wire_radius;
-    const BodyState& b = data.bodies[static_cast<std::size_t>(p.body)];
-    const Vec3 local = b.orientation.conjugate() * (p.anchor - b.position);
-    const double s = needle_closest_parameter(arc, local);
-    // Off the arc (tie_needles()' kPastTail, kPastTip): let go at the next sample.
-    if (s <= 0.0 && (local - needle_tail(arc)).dot(needle_tangent(arc, 0.0)) < 0.0) continue;
-    if (s >= arc.length() &&
-        (local - needle_tip(arc)).dot(needle_tangent(arc, arc.length())) > 4.0 * arc.wire_radius)
-      continue;
-    SlidingTie& t = data.sliding_ties[static_cast<std::size_t>(data.num_sliding_ties++)];
-    t.body = p.body;
-    t.local_point = needle_point(arc, s);
-    t.anchor = p.anchor;
-    t.anchor_velocity = p.velocity;
-    t.axis = b.orientation * needle_tangent(arc, s);
-    t.stiffness = p.stiffness;
-    t.damping = p.damping;
-    t.friction = p.friction;
-    t.force.setZero();
-  }
-}
-
-/// After a device period of `h` s: each tie's force (PunctureTie::force) and its material point
-/// carried on at its sample velocity.
-void carry_puncture_ties(double h, ContactPlaneSet& planes, const Data& data) noexcept {
-  const int nt = std::clamp(planes.tie_count, 0, kMaxPunctureTies);
-  int written = 0;
-  const int ns = std::clamp(data.num_sliding_ties, 0, kMaxSlidingTies);
-  for (int i = 0; i < nt; ++i) {
-    PunctureTie& p = planes.ties[static_cast<std::size_t>(i)];
-    // The ties written this period are the held ones, in order.
-    if (written < ns && data.sliding_ties[static_cast<std::size_t>(written)].body == p.body &&
-        data.sliding_ties[static_cast<std::size_t>(written)].anchor == p.anchor)
-      p.force = data.sliding_ties[static_cast<std::size_t>(written++)].force;
-    p.anchor += h * p.velocity;
-  }
 }
 
 }  // namespace
@@ -231,9 +175,7 @@ std::string make_proximity_model(const Model& scene, int body, double margin, Mo
 void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) noexcept {
   step_to_contacts(model, data);
   write_plane_contacts(model, planes, data);  // the contact stage: the planes'
-  write_puncture_ties(model, planes, data);
   step_from_contacts(model, data);
-  carry_puncture_ties(model.dt, planes, data);
   const std::vector<BodyState>& before = data.scratch->solver.saved_state;  // the step's start
   const double h = model.dt;
   const int np = std::clamp(planes.count, 0, kMaxContactPlanes);

@@ -17,6 +17,7 @@
 #include "numen/core/model.hpp"
 #include "numen/core/needle.hpp"
 #include "numen/core/rigid_body.hpp"
+#include "numen/core/sliding_tie.hpp"
 #include "numen/core/step.hpp"
 
 #include "scratch/data_scratch.hpp"
@@ -61,9 +62,10 @@ bool grasped_in(const GraspModel& g, const std::vector<int>& device_body) noexce
 }
 
 // The refusals of carried bodies and graspers (MultirateGodObject's constructor): throws
-// std::invalid_argument naming the body or grasper. `slots`: the bodies the device may hold.
+// std::invalid_argument naming the body or grasper. `riders`: the other devices' bodies and the
+// carried ones; `slots`: the bodies the device may hold.
 void check_carried(const Model& scene, int body, const MultirateSettings& settings,
-                   std::size_t slots) {
+                   std::span<const int> riders, std::size_t slots) {
   const std::vector<int>& tree = scene.articulation.body_tree;
   const auto tree_of = [&](int b) {
     return tree.size() == scene.bodies.size() ? tree[static_cast<std::size_t>(b)] : b;
@@ -99,8 +101,6 @@ void check_carried(const Model& scene, int body, const MultirateSettings& settin
   if (body < 0 && settings.tools.empty()) return;
   const int held = body >= 0 ? body : settings.tools.front();
   std::vector<int> device_body(scene.bodies.size(), -1);
-  std::vector<int> riders = settings.other_devices;
-  riders.insert(riders.end(), settings.carried.begin(), settings.carried.end());
   for (int g : god_object_bodies(scene, held, riders)) device_body[static_cast<std::size_t>(g)] = 0;
   for (const GraspModel& g : scene.grasps)
     if (!grasped_in(g, device_body))
@@ -139,7 +139,7 @@ MultirateGodObject::MultirateGodObject(const Model& scene, int body,
   // The carried bodies ride in every god-object as the other devices' instruments do.
   std::vector<int> riders = settings.other_devices;
   riders.insert(riders.end(), settings.carried.begin(), settings.carried.end());
-  check_carried(scene, body, settings, bodies.size());
+  check_carried(scene, body, settings, riders, bodies.size());
   std::size_t largest = 1;
   for (int b : bodies) {
     Slot s;
@@ -382,13 +382,57 @@ void MultirateGodObject::device_step(const MultirateSceneReport* fresh) noexcept
   }
   if (slot_ >= 0) {
     if (periods_since_model_ >= ratio_) ++counters_.stale_models;
+    hold_on_puncture_ties();
     step_god_object(device_model(), planes_, slot().device);
+    carry_puncture_ties();
     hand_back();
     test_punctures();
   }
   ++periods_since_model_;
   ++counters_.device_steps;
   ++period_;
+}
+
+void MultirateGodObject::hold_on_puncture_ties() noexcept {
+  Data& d = slot().device;
+  d.num_sliding_ties = 0;
+  const int nt = std::clamp(planes_.tie_count, 0, kMaxPunctureTies);
+  for (int i = 0; i < nt; ++i) {
+    PunctureTie& p = planes_.ties[static_cast<std::size_t>(i)];
+    p.force.setZero();
+    tie_slots_[static_cast<std::size_t>(i)] = -1;
+    if (p.needle < 0 || p.needle >= free_scene_model_.num_needles() || p.body < 0 ||
+        p.body >= static_cast<int>(d.bodies.size()) || d.num_sliding_ties >= kMaxSlidingTies)
+      continue;
+    const NeedleModel& n = free_scene_model_.needles[static_cast<std::size_t>(p.needle)];
+    const BodyState& b = d.bodies[static_cast<std::size_t>(p.body)];
+    const Vec3 local = b.orientation.conjugate() * (p.anchor - b.position);
+    const double s = needle_closest_parameter(n, local);
+    // Off the arc (tie_needles() lets it go): nothing until the next sample drops it.
+    if (needle_point_behind_tail(n, local, s) || needle_point_past_tip(n, local, s)) continue;
+    tie_slots_[static_cast<std::size_t>(i)] = d.num_sliding_ties;
+    SlidingTie& t = d.sliding_ties[static_cast<std::size_t>(d.num_sliding_ties++)];
+    t.body = p.body;
+    t.local_point = needle_point(n, s);
+    t.anchor = p.anchor;
+    t.anchor_velocity = p.velocity;
+    t.axis = b.orientation * needle_tangent(n, s);
+    t.stiffness = n.tie_stiffness;
+    t.damping = n.tie_damping;
+    t.friction = n.friction;
+  }
+}
+
+void MultirateGodObject::carry_puncture_ties() noexcept {
+  const Data& d = slot().device;
+  const double h = device_model().dt;
+  const int nt = std::clamp(planes_.tie_count, 0, kMaxPunctureTies);
+  for (int i = 0; i < nt; ++i) {
+    PunctureTie& p = planes_.ties[static_cast<std::size_t>(i)];
+    const int k = tie_slots_[static_cast<std::size_t>(i)];
+    if (k >= 0 && k < d.num_sliding_ties) p.force = d.sliding_ties[static_cast<std::size_t>(k)].force;
+    p.anchor += h * p.velocity;
+  }
 }
 
 void MultirateGodObject::test_punctures() noexcept {

@@ -384,12 +384,8 @@ void MultirateGodObject::write_puncture_ties(ContactPlaneSet& out) const noexcep
       if (p.face < 0 || p.face >= static_cast<int>(model.net_faces.size())) continue;
       const std::array<int, 3>& v = model.net_faces[static_cast<std::size_t>(p.face)];
       PunctureTie& t = out.ties[static_cast<std::size_t>(out.tie_count++)];
+      t.needle = static_cast<int>(k);
       t.body = device_body[static_cast<std::size_t>(n.body)];
-      t.radius = n.radius;
-      t.centre = n.centre;
-      t.tail_angle = n.tail_angle;
-      t.tip_angle = n.tip_angle;
-      t.wire_radius = n.wire_radius;
       t.anchor.setZero();
       t.velocity.setZero();
       for (int j = 0; j < 3; ++j) {  // the material point at the step's end
@@ -397,9 +393,6 @@ void MultirateGodObject::write_puncture_ties(ContactPlaneSet& out) const noexcep
         t.anchor += p.weights[j] * node.position;
         t.velocity += p.weights[j] * node.velocity;
       }
-      t.stiffness = n.tie_stiffness;
-      t.damping = n.tie_damping;
-      t.friction = n.friction;
       t.force.setZero();
     }
   }

@@ -196,12 +196,11 @@ TieFate measure_tie(const Model& model, const Data& data, const NeedleModel& n, 
   const Vec3 v = face_point(model, data, p.face, p.weights, true);
   const Vec3 local = b.orientation.conjugate() * (x - b.position);
   const double s = needle_closest_parameter(n, local);
-  if (s <= 0.0 && (local - needle_tail(n)).dot(needle_tangent(n, 0.0)) < 0.0) {
+  if (needle_point_behind_tail(n, local, s)) {
     p.position = x;
     return TieFate::kPastTail;
   }
-  if (s >= n.length() && (local - needle_tip(n)).dot(needle_tangent(n, n.length())) > 4.0 * n.wire_radius)
-    return TieFate::kPastTip;
+  if (needle_point_past_tip(n, local, s)) return TieFate::kPastTip;
   const Vec3 at = world_point(b, needle_point(n, s));
   const Vec3 t = b.orientation * needle_tangent(n, s);
   const Vec3 v_at = b.linear_velocity + b.angular_velocity.cross(at - b.position);

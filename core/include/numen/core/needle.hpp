@@ -114,6 +114,18 @@ double needle_closest_parameter(const NeedleModel& needle, const Vec3& point) no
 inline Vec3 needle_tip(const NeedleModel& needle) noexcept { return needle_point(needle, needle.length()); }
 inline Vec3 needle_tail(const NeedleModel& needle) noexcept { return needle_point(needle, 0.0); }
 
+/// Whether `point` (body frame, m), whose closest arc parameter is `s` (needle_closest_parameter()),
+/// has passed off the arc behind its tail (s = 0 and the point behind the tail along its tangent:
+/// the needle pulled through) or more than 4 r_w past its tip (the needle drawn back out): where a
+/// puncture point is let go (needle_puncture.hpp).
+inline bool needle_point_behind_tail(const NeedleModel& needle, const Vec3& point, double s) noexcept {
+  return s <= 0.0 && (point - needle_tail(needle)).dot(needle_tangent(needle, 0.0)) < 0.0;
+}
+inline bool needle_point_past_tip(const NeedleModel& needle, const Vec3& point, double s) noexcept {
+  return s >= needle.length() &&
+         (point - needle_tip(needle)).dot(needle_tangent(needle, needle.length())) > 4.0 * needle.wire_radius;
+}
+
 /// Checks every needle of `model` (radius > wire_radius > 0, arc angle in (0, 2π), a dynamic
 /// body with its spheres where add_needle() put them, puncture_force NaN or > 0, the puncture
 /// angle in (0, π/2], the tie's stiffness > 0, its damping and friction ≥ 0); returns "" or a

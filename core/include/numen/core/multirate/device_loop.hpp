@@ -80,11 +80,9 @@ std::string make_proximity_model(const Model& scene, int body, double margin, Mo
 /// god-object's step took its planes as moving at v₀) and, beyond v₀, its planes' stiffness K and
 /// damping C (Σ over its active planes of the contact terms' k n nᵀ and c n nᵀ + μ (I − n nᵀ)):
 ///   (m + h (D_n + C) + h² (K_n + K)) v₁ = m v₀ + h (F₀ − K_n u₀ + Σ links) + J + h (C + h K) v₀.
-/// The needles' puncture ties of the sample (ContactPlaneSet::ties) are the period's sliding ties
-/// (Data::sliding_ties, sliding_tie.hpp: stepped implicitly with the god-object), their forces
-/// written back (PunctureTie::force) and their material points carried on at their sample
-/// velocity. A rolled-back step (non-finite) gives no impulse; the carriers still step. Never
-/// allocates, throws or locks.
+/// The caller's sliding ties in `data` (Data::sliding_ties: a needle's puncture ties,
+/// MultirateGodObject) are stepped with the god-object. A rolled-back step (non-finite) gives no
+/// impulse; the carriers still step. Never allocates, throws or locks.
 void step_god_object(const Model& model, ContactPlaneSet& planes, Data& data) noexcept;
 
 }  // namespace numen::core

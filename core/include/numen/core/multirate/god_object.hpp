@@ -5,6 +5,7 @@
 /// caller's threads, with tool switching and a single-rate view of both loops.
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -287,6 +288,14 @@ class MultirateGodObject {
   /// and the snapshot of the scene (writes counters_, out.body, out.sample_period, out.scene).
   void write_scene_report(const MultirateDeviceReport& in, int body,
                           MultirateSceneReport& out) noexcept;
+  /// Device loop, before the god-object's step: the sample's puncture ties (PunctureTie) as the
+  /// device Data's sliding ties — each material point held on the line along the needle's arc
+  /// tangent at its closest arc point, by the needle's tie (NeedleModel::tie_stiffness,
+  /// tie_damping, friction), none where the point is off the arc (writes Data::sliding_ties,
+  /// tie_slots_). After it: each tie's force back into PunctureTie::force and its material point
+  /// carried on at its sample velocity for the period (writes planes_.ties).
+  void hold_on_puncture_ties() noexcept;
+  void carry_puncture_ties() noexcept;
   /// Device loop: each needle of the god-object's tip force along its tangent on the planes this
   /// period, and its puncture request (MultirateDeviceReport::puncture_requests) set, kept or
   /// withdrawn (writes tip_forces_, puncture_requests_).
@@ -330,6 +339,7 @@ class MultirateGodObject {
   bool took_model_ = false;       // the last device period took a new model
   std::vector<double> puncture_requests_;  // per needle (MultirateDeviceReport::puncture_requests)
   std::vector<double> tip_forces_;         // per needle: the tip's force along it on the planes (N)
+  std::array<int, kMaxPunctureTies> tie_slots_{};  // per puncture tie: its sliding tie, or −1
   // Scene loop.
   Data free_scene_;               // the scene loop's Data while nothing is held
   std::vector<int> free_joints_;  // identity: the free model's joints are the scene's

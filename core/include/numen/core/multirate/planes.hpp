@@ -152,18 +152,11 @@ inline constexpr int kMaxPunctureTies = 8;
 /// scene loop's own tie, on its nodes against the imposed needle (as a node plane's contact is
 /// the scene step's own).
 struct PunctureTie {
-  int body = -1;                       ///< The needle's body in the god-object model.
-  double radius = 0.0;                 ///< The arc: NeedleModel::radius (m),
-  Vec3 centre = Vec3::Zero();          ///< ... centre (m, body frame),
-  double tail_angle = 0.0;             ///< ... tail_angle and tip_angle (rad),
-  double tip_angle = 0.0;
-  double wire_radius = 0.0;            ///< ... wire_radius (m).
+  int needle = -1;                     ///< The needle (Model::needles of the scene).
+  int body = -1;                       ///< Its body in the god-object model.
   Vec3 anchor = Vec3::Zero();          ///< The material point (m, world): at the sample, then carried.
   Vec3 velocity = Vec3::Zero();        ///< Its velocity at the sample (m/s, world).
-  double stiffness = 0.0;              ///< NeedleModel::tie_stiffness (N/m).
-  double damping = 0.0;                ///< NeedleModel::tie_damping (N·s/m).
-  double friction = 0.0;               ///< NeedleModel::friction (N·s/m).
-  /// Written by step_god_object(): the tie's force on the needle at the last device period's
+  /// Written by the device loop: the tie's force on the needle at the last device period's
   /// start (N, world; SlidingTie::force), zero where the point was off the arc.
   Vec3 force = Vec3::Zero();
 };
