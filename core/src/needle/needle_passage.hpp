@@ -1,7 +1,7 @@
 #pragma once
 /// @file needle/needle_passage.hpp
 /// What the multirate scene loop asks of the needles' passages (needle_puncture.hpp;
-/// docs/multirate.md, "A needle in the device loop"). Private to numen::core.
+/// docs/multirate-suturing.md, "A needle in the device loop"). Private to numen::core.
 
 namespace numen::core {
 struct Model;

@@ -627,7 +627,7 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                 .error("tissue", "grasper '" + scene.model.grasps[g].name +
                                      "' holds bodies only in a scene with [multirate]: the jaws "
                                      "are the device loop's and the tissue the scene loop's, and "
-                                     "a grip across the two is not built (docs/multirate.md, "
+                                     "a grip across the two is not built (docs/multirate-suturing.md, "
                                      "\"Grasping in the device loop\")")
                 .what());
   }

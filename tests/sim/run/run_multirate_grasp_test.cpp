@@ -1,4 +1,4 @@
-// Tests of grasping in the device loop of a multirate run (issue 69; docs/multirate.md,
+// Tests of grasping in the device loop of a multirate run (issue 69; docs/multirate-suturing.md,
 // "Grasping in the device loop"): the shipped peg transfer with the scene loop at 100 Hz, its
 // graspers and the six objects in the device loop (core::MultirateSettings::carried), against
 // the single-rate run; and its periods without a heap allocation.

@@ -1,5 +1,5 @@
 // Tests of the suturing scene's needle in the device loop of a multirate run (issue 69;
-// docs/multirate.md, "A needle in the device loop"): its first pass at 10 kHz with the scene
+// docs/multirate-suturing.md, "A needle in the device loop"): its first pass at 10 kHz with the scene
 // loop at 1 kHz, against the single-rate run at 10 kHz. The shipped scene without its thread
 // (single-rate only: docs/multirate.md, "What is left").
 

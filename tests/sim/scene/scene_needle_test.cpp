@@ -99,7 +99,7 @@ exit_mark = [0.0, 0.16, 0.05]
 }
 
 // A scene with [multirate] and a [[needle]] loads: with the grasper of default_with(), the device
-// loop carries the needle (docs/multirate.md, "A needle in the device loop").
+// loop carries the needle (docs/multirate-suturing.md, "A needle in the device loop").
 TEST(SceneNeedle, AMultirateSceneCarriesTheNeedleInTheDeviceLoop) {
   NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
   numen::test::TempDir dir;

@@ -141,7 +141,7 @@ TEST(SceneServo, BadKeysAreLocatedErrors) {
 }
 
 // In a multirate run the servo watches the run's view of both loops, written every device period
-// (docs/multirate.md, "A needle in the device loop": the suturing scene's drivers there).
+// (docs/multirate-suturing.md, "A needle in the device loop": the suturing scene's drivers there).
 TEST(SceneServo, AMultirateSceneKeepsItsServo) {
   numen::test::TempDir dir;
   const std::string text =

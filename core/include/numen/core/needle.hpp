@@ -78,7 +78,7 @@ struct NeedleModel {
   /// The puncture test is another's: find_punctures() measures NeedleState::tip_force but does not
   /// puncture, detail::puncture_on_request() does. Set in the multirate scene loop's models for a
   /// needle the device loop steps, whose tip's contacts the device loop renders and tests
-  /// (docs/multirate.md, "A needle in the device loop"); false otherwise.
+  /// (docs/multirate-suturing.md, "A needle in the device loop"); false otherwise.
   bool puncture_on_request = false;
   double length() const noexcept { return radius * arc_angle; }  ///< L = R φ (m).
 };

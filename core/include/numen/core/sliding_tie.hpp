@@ -4,7 +4,7 @@
 /// line and viscous friction along it, stepped with the bodies (its stiffness and damping in the
 /// linearly implicit step's matrix). What a needle's puncture point is to the needle where the
 /// tissue is not in the same step (needle_puncture.hpp: the multirate device loop, whose needle
-/// the scene loop's tissue holds; docs/multirate.md, "A needle in the device loop").
+/// the scene loop's tissue holds; docs/multirate-suturing.md, "A needle in the device loop").
 ///
 /// With x the body's point (world), v its velocity, p the anchor and w its velocity, a the unit
 /// axis of the line, P = I − a aᵀ:

@@ -48,7 +48,7 @@ std::vector<int> god_object_bodies(const Model& scene, int body, std::span<const
 /// rate); refused: a body of `others` out of range. `others` may also name free bodies the device
 /// loop carries (MultirateSettings::carried: driven by nothing). The scene's graspers whose two
 /// jaws are in the model grasp here, in the device step (grasp.hpp, their jaws renumbered; the
-/// others are left out): docs/multirate.md, "Grasping in the device loop". Load time: allocates.
+/// others are left out): docs/multirate-suturing.md, "Grasping in the device loop". Load time: allocates.
 std::string make_god_object_model(const Model& scene, int body, double device_dt, Model& out,
                                   std::span<const int> others = {});
 

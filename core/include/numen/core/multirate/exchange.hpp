@@ -33,7 +33,7 @@ struct MultirateDeviceReport {
   /// Per needle (Model::needles): > 0 when the device loop found the needle's tip pressing on
   /// the tissue's planes by its puncture force along its tangent (the force then, N; latched
   /// until the scene loop makes the puncture, or withdrawn when the force falls back below it),
-  /// 0 otherwise (docs/multirate.md, "A needle in the device loop").
+  /// 0 otherwise (docs/multirate-suturing.md, "A needle in the device loop").
   std::vector<double> puncture_requests;
 };
 

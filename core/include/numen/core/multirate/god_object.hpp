@@ -37,7 +37,7 @@ struct MultirateSettings {
   /// target (Eq. 6) and with its own Eq. 8 feedback (Data::feedback_group), and their mutual
   /// contacts are the device step's (write_plane_contacts()). Empty: one device.
   std::vector<int> other_devices{};
-  /// Free bodies the device loop steps with the god-object (issue 69; docs/multirate.md,
+  /// Free bodies the device loop steps with the god-object (issue 69; docs/multirate-suturing.md,
   /// "Grasping in the device loop"): the bodies its graspers may hold (a peg, a needle), each
   /// its own articulation in every god-object as the other devices' are, but driven by nothing:
   /// gravity, the planes of its contacts with the scene, its contacts with the instruments at
@@ -94,7 +94,7 @@ struct MultirateCounters {
 ///   4. the impulse those contacts gave each scene body (their effective force over the step,
 ///      below) is subtracted from what it is owed; the report's new impulses are added; the
 ///      punctures the device loop asked for are made, and the report carries the planes (less
-///      those a needle's passage stands for) and each passage's puncture ties (docs/multirate.md,
+///      those a needle's passage stands for) and each passage's puncture ties (docs/multirate-suturing.md,
 ///      "A needle in the device loop").
 /// One device period:
 ///   5. a new model for the held body, if one came, replaces the planes (their carriers

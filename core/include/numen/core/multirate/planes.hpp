@@ -141,7 +141,7 @@ struct CarrierLink {
 inline constexpr int kMaxPunctureTies = 8;
 
 /// A needle's puncture point of the scene loop's tissue, as the device loop holds the needle on it
-/// (docs/multirate.md, "A needle in the device loop"): the material point (the punctured
+/// (docs/multirate-suturing.md, "A needle in the device loop"): the material point (the punctured
 /// triangle's point at its barycentric weights) at the sample and its velocity, carried on at that
 /// velocity between samples, and the needle's arc; each device period the needle's closest arc
 /// point is held on the line through the material point along the arc's tangent there by a
