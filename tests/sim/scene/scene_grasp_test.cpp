@@ -194,3 +194,16 @@ TEST(SceneGrasp, AMultirateGrasperOutsideTheInstrumentsIsRefusedAtItsJaws) {
   numen::test::expect_located(numen::test::load_error(dir, text), (dir / "bad.toml").string(), line, 0,
                               "grasp[0].jaws", "is in no device's instrument");
 }
+
+// Graspers hold in the device step: a multirate scene whose device switches to another body (an
+// attach event) would drop what they hold, and is refused at the table.
+TEST(SceneGrasp, AMultirateGrasperSceneWithAToolSwitchIsRefused) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
+  numen::test::TempDir dir;
+  const std::string text = default_with_grasp(
+      "\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n\n[[grasp]]\nname = \"grasper\"\n"
+      "jaws = [\"jaw_1\", \"jaw_2\"]\n\n[[event]]\ntime = 1.0\nattach = \"block\"\n");
+  const numen::sim::InputError e = numen::test::load_error(dir, text);
+  EXPECT_EQ(e.key(), "multirate.scene_dt");
+  EXPECT_NE(e.message().find("one held body"), std::string::npos) << e.what();
+}
