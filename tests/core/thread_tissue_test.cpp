@@ -189,19 +189,7 @@ TEST(ThreadTissue, TheNeedlesEntryIsTakenOverByTheThreadAtItsTail) {
   // passes the entry the thread takes the point over as an eyelet on the tissue, passes through
   // it, slides through it as the needle is pulled on, and tents the tissue up through friction.
   core::Model m = numen::test::puncture_rig(numen::test::kPunctureThreshold, 60 * numen::test::kPunctureDeg, false, false);
-  {
-    const core::NeedleModel& n = m.needles[0];
-    const core::Pose& pose = m.bodies[1].initial_pose;
-    core::ThreadModel t;
-    t.name = "suture";
-    t.length = 0.06;
-    t.segments = 60;
-    t.start = pose.position + pose.orientation * core::needle_tail(n);
-    t.direction = core::Vec3::UnitZ();
-    t.tie_start.body = 1;
-    t.tie_start.point = core::needle_tail(n);
-    m.threads.push_back(t);
-  }
+  numen::test::add_tail_thread(m, 0.06, 60);
   ASSERT_EQ(core::finalize_model(m), "");
   ASSERT_EQ(m.threads[0].needle, 0) << "the thread's start is tied to the needle";
   core::Data d = core::make_data(m);

@@ -17,6 +17,7 @@
 #include "numen/core/needle.hpp"
 #include "numen/core/net_material.hpp"
 #include "numen/core/data.hpp"
+#include "numen/core/thread.hpp"
 #include "organ_indentation.hpp"
 #include "rotation.hpp"
 
@@ -74,6 +75,44 @@ inline core::Model puncture_rig(double threshold = kPunctureThreshold, double ma
   if (finalize) {
     EXPECT_EQ(core::finalize_model(m), "");
   }
+  return m;
+}
+
+/// Adds to the puncture rig `m` (before core::finalize_model()) a thread of `length` (m) and
+/// `segments` tied at its needle's tail (body 1), starting straight up: along the tail's tangent
+/// it would start through the patch.
+inline void add_tail_thread(core::Model& m, double length, int segments) {
+  const core::NeedleModel& n = m.needles[0];
+  const core::Pose& pose = m.bodies[1].initial_pose;
+  core::ThreadModel t;
+  t.name = "suture";
+  t.length = length;
+  t.segments = segments;
+  t.start = pose.position + pose.orientation * core::needle_tail(n);
+  t.direction = core::Vec3::UnitZ();
+  t.tie_start.body = 1;
+  t.tie_start.point = core::needle_tail(n);
+  m.threads.push_back(t);
+}
+
+/// puncture_rig() at step `dt` (s) with its needle weighted to `mass` (kg; inertia scaled alike,
+/// the coupling's and the feedback's damping ratio 0.85 kept): the mass a needle has in a
+/// grasper's jaws, where the jaws and the instrument move with it. The multirate needle tests
+/// and benchmark take 20 g at 0.1 ms: the 78 mg needle alone on the hand's coupling is not what
+/// the device loop can hold on the organ's planes (docs/multirate-suturing.md, "The needle's mass").
+/// `thread_length` > 0: with add_tail_thread() of that length (m) and one segment a millimetre.
+inline core::Model weighted_puncture_rig(double mass, double dt, double thread_length = 0.0) {
+  core::Model m = puncture_rig(kPunctureThreshold, 60 * kPunctureDeg, false, false);
+  if (thread_length > 0.0) add_tail_thread(m, thread_length, static_cast<int>(std::lround(thread_length * 1e3)));
+  m.dt = dt;
+  const double q = mass / m.bodies[1].mass;
+  m.bodies[1].mass *= q;
+  m.bodies[1].inertia_body *= q;
+  const double inertia = m.bodies[1].inertia_body(2, 2);
+  m.bodies[1].coupling = core::CouplingGains{500.0, core::damping_from_ratio(0.85, mass, 500.0), 0.05,
+                                             core::damping_from_ratio(0.85, inertia, 0.05)};
+  m.feedback = core::FeedbackGains{500.0, m.bodies[1].coupling.gamma_t, 0.05, m.bodies[1].coupling.gamma_r};
+  EXPECT_EQ(core::finalize_model(m), "");
   return m;
 }
 

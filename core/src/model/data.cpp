@@ -108,6 +108,7 @@ Data make_data(const Model& model, const DataOptions& options) {
     scratch.net.node_contact_next.assign(model.joints.empty() ? 0 : data.node_contacts.size(), -1);
   }
   data.threads.resize(model.threads.size());  // thread.hpp
+  data.thread_reactions.resize(model.threads.empty() ? 0 : n);
   scratch.threads.resize(model.threads.size());
   for (std::size_t i = 0; i < model.threads.size(); ++i) {
     const auto nodes = static_cast<std::size_t>(model.threads[i].segments + 1);
@@ -141,6 +142,7 @@ void reset_data(const Model& model, Data& data) noexcept {
     reset_thread(model.threads[i], data.threads[i]);
     data.scratch->threads[i].forget_touches();
   }
+  for (Wrench& w : data.thread_reactions) w = Wrench{};
   for (JointPrescription& p : data.joint_prescribed) p = JointPrescription{};
   for (JointState& j : data.joints) j = JointState{};
   for (Vec6& v : data.scratch->solver.delta) v.setZero();  // Δu_prev of the joint rows (joint_system.hpp)
@@ -212,6 +214,8 @@ void copy_all_but_joints(const From& from, StepOutputs& to) noexcept {
   detail::copy_node_contacts(from, to);
   std::copy_n(from.nets.begin(), std::min(to.nets.size(), from.nets.size()), to.nets.begin());
   std::copy_n(from.needles.begin(), std::min(to.needles.size(), from.needles.size()), to.needles.begin());
+  for (std::size_t i = 0; i < to.threads.size() && i < from.threads.size(); ++i)
+    copy_thread_state(from.threads[i], to.threads[i]);
 }
 
 }  // namespace
@@ -224,6 +228,7 @@ StepOutputs make_step_outputs(const Data& data, std::size_t num_joints) {
   o.node_contacts.assign(data.node_contacts.size(), NodeContact{});
   o.nets = data.nets;
   o.needles = data.needles;
+  o.threads = data.threads;
   return o;
 }
 

@@ -43,7 +43,7 @@ DataFootprint data_footprint(const Data& d) noexcept {
   DataFootprint f;
   f.sizeof_data = sizeof(Data);
   f.groups[0] = {"bodies", heap(d.bodies, d.applied_wrench, d.body_targets, d.body_feedback,
-                                d.body_wrench, d.feedback_group, d.feedback_point, d.grasps)};
+                                d.body_wrench, d.feedback_group, d.feedback_point, d.grasps, d.thread_reactions)};
   f.groups[1] = {"collision scratch",
                  heap(c.sphere_world, c.sphere_x, c.sphere_y, c.sphere_z, c.sphere_r,
                       c.body_aabb_min, c.body_aabb_max, c.sweep_order, c.near_a, c.near_b,

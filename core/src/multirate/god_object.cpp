@@ -346,8 +346,23 @@ bool MultirateGodObject::take_scene_report(const MultirateSceneReport& m) noexce
   std::copy_n(m.planes.links.begin(), planes_.link_count, planes_.links.begin());
   planes_.tie_count = std::clamp(m.planes.tie_count, 0, kMaxPunctureTies);
   std::copy_n(m.planes.ties.begin(), planes_.tie_count, planes_.ties.begin());
+  planes_.pull_count = std::clamp(m.planes.pull_count, 0, kMaxThreadPulls);
+  std::copy_n(m.planes.pulls.begin(), planes_.pull_count, planes_.pulls.begin());
   periods_since_model_ = 0;
+  apply_thread_pulls();
   return true;
+}
+
+void MultirateGodObject::apply_thread_pulls() noexcept {
+  if (slot_ < 0) return;
+  Data& d = slot().device;
+  for (Wrench& w : d.applied_wrench) w = Wrench{};
+  for (int i = 0; i < planes_.pull_count; ++i) {
+    const ThreadPull& p = planes_.pulls[static_cast<std::size_t>(i)];
+    if (p.body < 0 || p.body >= static_cast<int>(d.applied_wrench.size())) continue;
+    d.applied_wrench[static_cast<std::size_t>(p.body)].force += p.wrench.force;
+    d.applied_wrench[static_cast<std::size_t>(p.body)].torque += p.wrench.torque;
+  }
 }
 
 void MultirateGodObject::hand_back() noexcept {
@@ -524,6 +539,15 @@ void MultirateGodObject::view(Data& out) const noexcept {
     if (slot_ >= 0 && k < free_scene_model_.needles.size() &&
         slot().device_body[static_cast<std::size_t>(free_scene_model_.needles[k].body)] >= 0)
       out.needles[k].tip_force = tip_forces_[k];
+  // The threads as the scene loop left them; their step's events (a break, a Newton iteration
+  // that ran out) in the one view after that step.
+  for (std::size_t i = 0; i < out.threads.size() && i < snap.threads.size(); ++i) {
+    copy_thread_state(snap.threads[i], out.threads[i]);
+    if (!took_model_) {
+      out.threads[i].output.broke = false;
+      out.threads[i].output.converged = true;
+    }
+  }
   for (int i = 0; i < out.num_node_contacts; ++i)
     deepest = std::max(deepest, out.node_contacts[static_cast<std::size_t>(i)].depth);
   for (const NetOutput& o : out.nets)

@@ -314,6 +314,7 @@ void MultirateGodObject::write_scene_report(const MultirateDeviceReport& in, int
   out.sample_period = in.period;
   drop_passage_planes(out.planes);
   write_puncture_ties(out.planes);
+  write_thread_pulls(out.planes);
   const std::vector<int>& scene_joints =
       scene_slot_ >= 0 ? slots_[static_cast<std::size_t>(scene_slot_)].scene_joints : free_joints_;
   const std::span<const int> device_body = scene_device_body();
@@ -395,6 +396,18 @@ void MultirateGodObject::write_puncture_ties(ContactPlaneSet& out) const noexcep
       }
       t.force.setZero();
     }
+  }
+}
+
+void MultirateGodObject::write_thread_pulls(ContactPlaneSet& out) const noexcept {
+  out.pull_count = 0;
+  const std::span<const int> device_body = scene_device_body();
+  const std::vector<Wrench>& reactions = scene_->thread_reactions;  // empty without a thread
+  for (std::size_t b = 0; b < reactions.size() && b < device_body.size(); ++b) {
+    const Wrench& w = reactions[b];
+    if (device_body[b] < 0 || (w.force.isZero(0.0) && w.torque.isZero(0.0)) || out.pull_count >= kMaxThreadPulls)
+      continue;
+    out.pulls[static_cast<std::size_t>(out.pull_count++)] = ThreadPull{device_body[b], w};
   }
 }
 

@@ -108,8 +108,8 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
     const BodyModel& bm = model.bodies[static_cast<std::size_t>(b)];
     const BodyState& bs = data.bodies[static_cast<std::size_t>(b)];
     const Mat3 rot = bs.orientation.toRotationMatrix();
-    const bool imposed = bm.anchored ||
-                         (model.coupling_mode == CouplingMode::kDirect && b == data.held_body);
+    // Anchored or imposed (kDirect, and a multirate scene loop's god-object): infinitely heavy.
+    const bool imposed = bm.anchored || data.scratch->solver.imposed[static_cast<std::size_t>(b)] != 0;
     const int first = thread.tie_start.body == b ? 3 : 0;
     const int last = thread.tie_end.body == b ? segs - 3 : segs;
     const MaterialPair& mp = model.material_pair(thread.material, bm.material);
@@ -117,7 +117,9 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
     for (int k = bm.sphere_begin; k < bm.sphere_begin + bm.sphere_count; ++k) {
       const Sphere& sp = model.body_spheres[static_cast<std::size_t>(k)];
       const Vec3 c = bs.position + rot * sp.center;
-      const double reach = sp.radius + rt;
+      // The true sphere: a multirate scene loop grows the god-object's by its margin.
+      const double radius = sp.radius - bm.sphere_margin;
+      const double reach = radius + rt;
       const double candidate_reach = reach + kThreadContactMargin;
       // The thread, a run, then a segment, whose bounds miss the sphere's is out of its reach
       // (the test below would leave it): the bounds first, cheaper. The segments in their order.
@@ -149,7 +151,7 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
         if (auto slot = std::find(now.begin(), now.end(), -1); slot != now.end()) *slot = k;
         const double dist = std::sqrt(dist2);
         const Vec3 n = dist2 > kDegenerateDistance2 ? Vec3(d / dist) : Vec3::UnitZ();
-        const Vec3 r = c + sp.radius * n - bs.position;  // lever arm of the contact point
+        const Vec3 r = c + radius * n - bs.position;  // lever arm of the contact point
         const Vec3 vb = bs.linear_velocity + bs.angular_velocity.cross(r);
         const double m_eff = contact_effective_mass(bm, bs, r, imposed, nullptr, nullptr,
                                                     Vec3::Zero(), false, n);
@@ -160,7 +162,7 @@ void gather_thread_body_contacts(const Model& model, const Data& data, int index
         set_segment_blocks(*term, s, u);
         term->target_velocity = vb;
         term->body = bm.anchored ? -1 : b;
-        term->point = c + sp.radius * n;
+        term->point = c + radius * n;
         if (touching) {
           fill_contact(*term, mp, k, reach - dist, n, p.v - vb);
           ++st.output.body_contacts;

@@ -1,6 +1,7 @@
 /// @file thread_model.cpp
 /// A thread's settings checked and derived, its initial state (thread.hpp).
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -82,6 +83,20 @@ void reset_thread(const ThreadModel& t, ThreadState& s) noexcept {
   s.broken_segment = -1;
   s.eyelets_taken = s.eyelets_let_go = s.eyelets_dropped = 0;
   s.output = ThreadOutput{};
+}
+
+void copy_thread_state(const ThreadState& from, ThreadState& to) noexcept {
+  const std::size_t n = std::min(from.position.size(), to.position.size());
+  std::copy_n(from.position.begin(), n, to.position.begin());
+  std::copy_n(from.velocity.begin(), std::min(n, std::min(from.velocity.size(), to.velocity.size())), to.velocity.begin());
+  std::copy_n(from.external_force.begin(),
+              std::min(n, std::min(from.external_force.size(), to.external_force.size())), to.external_force.begin());
+  to.eyelets = from.eyelets;
+  to.broken_segment = from.broken_segment;
+  to.eyelets_taken = from.eyelets_taken;
+  to.eyelets_let_go = from.eyelets_let_go;
+  to.eyelets_dropped = from.eyelets_dropped;
+  to.output = from.output;
 }
 
 void ThreadScratch::resize(const ThreadModel& t, int model_nodes, int graspers) {

@@ -24,6 +24,18 @@
 namespace numen::core {
 namespace {
 
+/// Adds a thread's reaction on body `body` to its explicit wrench and to the threads' own record
+/// of it (Data::thread_reactions).
+void add_thread_reaction(Data& data, int body, const Wrench& w) noexcept {
+  const auto b = static_cast<std::size_t>(body);
+  data.body_wrench[b].force += w.force;
+  data.body_wrench[b].torque += w.torque;
+  if (b < data.thread_reactions.size()) {
+    data.thread_reactions[b].force += w.force;
+    data.thread_reactions[b].torque += w.torque;
+  }
+}
+
 /// Newton iterations a step, at most: a straight segment turning by θ in a step stretches by
 /// θ²/2 under the first linearisation alone (its rotation is not linear); each further
 /// iteration squares the error.
@@ -69,6 +81,11 @@ TiePoint tie_point(const Model& model, const Data& data, const ThreadTie& tie, i
   p.lever = p.rotation * tie.point;
   p.point = bs.position + p.lever;
   p.velocity = bs.linear_velocity + bs.angular_velocity.cross(p.lever);
+  // A kDirect held body moves as given. Any other body, a multirate scene loop's imposed
+  // god-object included, has its own mass here: the thread's end yields as the body alone would,
+  // and the pull goes to the device loop, where the body is (ThreadPull). Taken as given there
+  // (infinitely heavy), the tie's pull on the needle jumped to 36 N in one scene step once an
+  // eyelet held the thread, and threw it (docs/multirate-suturing.md, "A thread in the scene loop").
   const bool imposed = model.coupling_mode == CouplingMode::kDirect && tie.body == data.held_body;
   if (bm.anchored || imposed) return p;
   Mat3 rx;
@@ -274,8 +291,7 @@ void hand_point_term_forces(Data& data, ThreadState& st, ThreadScratch& sc,
       data.grasps[static_cast<std::size_t>(term.grasp)].thread_nodes[static_cast<std::size_t>(term.grasp_node)].force += f;
     if (term.body < 0) continue;
     const BodyState& bs = data.bodies[static_cast<std::size_t>(term.body)];
-    data.body_wrench[static_cast<std::size_t>(term.body)].force -= f;
-    data.body_wrench[static_cast<std::size_t>(term.body)].torque -= (term.point - bs.position).cross(f);
+    add_thread_reaction(data, term.body, Wrench{-f, -(term.point - bs.position).cross(f)});
   }
 }
 
@@ -431,8 +447,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
   for (const auto& [tie, w] : {std::pair{&th.tie_start, &st.output.tie_wrench_start},
                                std::pair{&th.tie_end, &st.output.tie_wrench_end}}) {
     if (tie->body < 0 || model.bodies[static_cast<std::size_t>(tie->body)].anchored) continue;
-    data.body_wrench[static_cast<std::size_t>(tie->body)].force += w->force;
-    data.body_wrench[static_cast<std::size_t>(tie->body)].torque += w->torque;
+    add_thread_reaction(data, tie->body, *w);
   }
   measure_thread(th, st);
 }
@@ -442,6 +457,7 @@ void step_thread(const Model& model, Data& data, int index, const ThreadModel& t
 void step_threads(const Model& model, Data& data) noexcept {
   data.stages_run |= kStageThreads;
   data.num_node_thread_ties = 0;
+  for (Wrench& w : data.thread_reactions) w = Wrench{};
   for (std::size_t i = 0; i < model.threads.size(); ++i) {
     const ThreadModel& th = model.threads[i];
     ThreadState& st = data.threads[i];

@@ -609,13 +609,6 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
     warn_organs_inside_tools(scene.model, scene.net_triangles, scene.warnings);
   warn_clamped_contacts(scene.model, scene.warnings);
   warn_yielding_coupling(scene.model, scene.warnings);
-  if (root.table("multirate")) {
-    // A thread runs in the single-rate step: a multirate run would not hand its pull on the
-    // needle or the jaws to the device loop (docs/multirate.md, "What is left").
-    for (const TomlTable& t : root.tables("thread"))
-      t.fail("name", "threads run in the single-rate step: a scene with [multirate] has no thread yet "
-                     "(docs/thread.md, \"Limits\")");
-  }
   parse_multirate(root, scene);
   if (scene.multirate) {
     // The device step grasps bodies only: a net's tissue is the scene loop's.
@@ -629,6 +622,17 @@ Scene load_scene(const std::string& path, const SceneOverrides& overrides) {
                                      "are the device loop's and the tissue the scene loop's, and "
                                      "a grip across the two is not built (docs/multirate-suturing.md, "
                                      "\"Grasping in the device loop\")")
+                .what());
+    // The threads live in the scene loop, which has no grasper (the jaws are the device loop's).
+    const std::vector<TomlTable> thread_tables = root.tables("thread");
+    if (!scene.model.grasps.empty())
+      for (std::size_t i = 0; i < scene.model.threads.size() && i < thread_tables.size(); ++i)
+        scene.warnings.push_back(
+            thread_tables[i]
+                .error("name", "thread '" + scene.model.threads[i].name +
+                                   "' is not grasped by the jaws in a scene with [multirate]: the thread "
+                                   "lives in the scene loop and the graspers in the device loop "
+                                   "(docs/multirate-suturing.md, \"A thread in the scene loop\")")
                 .what());
   }
   if (overrides.replay) {

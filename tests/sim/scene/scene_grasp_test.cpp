@@ -36,6 +36,13 @@ spheres = [[0.0, 0.0, 0.0, 0.004]]
 )" + grasp;
 }
 
+/// default_with_grasp() as a multirate scene (scene loop at 2 ms) with one grasper on the jaws,
+/// and `extra` appended.
+std::string multirate_with_grasper(const std::string& extra) {
+  return default_with_grasp("\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n\n[[grasp]]\nname = \"grasper\"\n"
+                            "jaws = [\"jaw_1\", \"jaw_2\"]\n" + extra);
+}
+
 }  // namespace
 
 TEST(SceneGrasp, KeysAreReadWithTheirDefaults) {
@@ -200,10 +207,25 @@ TEST(SceneGrasp, AMultirateGrasperOutsideTheInstrumentsIsRefusedAtItsJaws) {
 TEST(SceneGrasp, AMultirateGrasperSceneWithAToolSwitchIsRefused) {
   NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
   numen::test::TempDir dir;
-  const std::string text = default_with_grasp(
-      "\n[multirate]\nscene_dt = 0.002\nmargin = 0.002\n\n[[grasp]]\nname = \"grasper\"\n"
-      "jaws = [\"jaw_1\", \"jaw_2\"]\n\n[[event]]\ntime = 1.0\nattach = \"block\"\n");
+  const std::string text = multirate_with_grasper("\n[[event]]\ntime = 1.0\nattach = \"block\"\n");
   const numen::sim::InputError e = numen::test::load_error(dir, text);
   EXPECT_EQ(e.key(), "multirate.scene_dt");
   EXPECT_NE(e.message().find("one held body"), std::string::npos) << e.what();
+}
+
+// A thread lives in the scene loop of a multirate run, the graspers in its device loop: a scene
+// with both is warned at the thread's name that the jaws do not grasp it there
+// (docs/multirate-suturing.md, "A thread in the scene loop").
+TEST(SceneGrasp, AMultirateGrasperSceneWithAThreadIsWarnedAtTheThread) {
+  NUMEN_REQUIRE_DEFORMABLE();  // the default scene has an organ
+  numen::test::TempDir dir;
+  const std::string text =
+      multirate_with_grasper("\n[[thread]]\nname = \"suture\"\nlength = 0.05\nattach_body = \"block\"\n");
+  const numen::sim::Scene s = numen::sim::load_scene(dir.write("mr.toml", text));
+  ASSERT_EQ(s.model.threads.size(), 1u);
+  const auto warned = std::find_if(s.warnings.begin(), s.warnings.end(), [](const std::string& w) {
+    return w.find("thread[0].name") != std::string::npos &&
+           w.find("thread 'suture' is not grasped by the jaws") != std::string::npos;
+  });
+  EXPECT_NE(warned, s.warnings.end()) << "warned at the thread's name";
 }

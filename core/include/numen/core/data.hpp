@@ -201,6 +201,11 @@ struct Data {
   std::vector<NetOutput> nets;     ///< Per net (Model::nets).
   /// Per thread (Model::threads): its nodes, inputs (external forces, eyelets) and outputs.
   std::vector<ThreadState> threads;
+  /// Per body when the model has threads, else empty: the threads' reactions on it this step
+  /// (N, N·m about its centre of mass; world), the part of body_wrench that step_threads() added
+  /// (their ties' and contacts' reactions). A multirate scene loop hands those on the god-object's
+  /// bodies to the device loop (ContactPlaneSet::pulls, docs/multirate-suturing.md).
+  std::vector<Wrench> thread_reactions;
   /// Per grasper (Model::grasps): what it holds, its springs and this step's event (grasp.hpp).
   std::vector<GraspState> grasps;
   /// Per needle (Model::needles): its passage through tissue, its puncture points and events

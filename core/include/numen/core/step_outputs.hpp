@@ -50,9 +50,10 @@ struct StepOutputs {
   int num_node_thread_ties = 0;
   std::vector<NetOutput> nets;
   std::vector<NeedleState> needles;  ///< Per needle (Model::needles): its passage (needle_puncture.hpp).
+  std::vector<ThreadState> threads;  ///< Per thread (Model::threads): its nodes and outputs (thread.hpp).
 };
 
-/// A StepOutputs sized for `data` with `num_joints` joints: its bodies, nodes, nets and needles copied
+/// A StepOutputs sized for `data` with `num_joints` joints: its bodies, nodes, nets, needles and threads copied
 /// from `data`, its joints, node contacts (as many as `data` has room for) and the rest zero.
 /// Load time: allocates.
 StepOutputs make_step_outputs(const Data& data, std::size_t num_joints);

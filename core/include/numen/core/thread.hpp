@@ -202,6 +202,10 @@ std::string finalize_thread(ThreadModel& thread, int num_bodies, int num_materia
 /// Puts `state` at the initial straight shape of `thread` at rest (no allocation once sized).
 void reset_thread(const ThreadModel& thread, ThreadState& state) noexcept;
 
+/// Copies `from` into `to`: every field, the node vectors over the smaller of the two sizes (a
+/// multirate snapshot of the scene loop's thread, StepOutputs::threads). No allocation.
+void copy_thread_state(const ThreadState& from, ThreadState& to) noexcept;
+
 /// Steps every thread of `model` by Model::dt from the bodies' states at the step's start and
 /// adds the ties', contacts' and held nodes' springs' reactions to Data::body_wrench (the jaws
 /// get the springs' of GraspState::thread_nodes, whose `force` it writes; the body-force stage; sets

@@ -311,6 +311,12 @@ class MultirateGodObject {
   /// The puncture ties of the needles of the god-object (PunctureTie) from the scene Data's
   /// passages, their material points at the step's end (writes out.ties, out.tie_count).
   void write_puncture_ties(ContactPlaneSet& out) const noexcept;
+  /// The threads' reactions on the god-object's bodies in the scene step (ThreadPull, from
+  /// Data::thread_reactions; writes out.pulls, out.pull_count).
+  void write_thread_pulls(ContactPlaneSet& out) const noexcept;
+  /// Device loop, at a new sample: its thread pulls as the device Data's applied wrenches, the
+  /// other bodies' zero (writes the device Data's Data::applied_wrench).
+  void apply_thread_pulls() noexcept;
   /// The scene loop's current god-object: its bodies (scene indices; empty without one).
   std::span<const int> scene_god() const noexcept;
   /// ... per scene body its god-object model index or −1 (empty without one).

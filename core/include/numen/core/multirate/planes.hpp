@@ -161,18 +161,33 @@ struct PunctureTie {
   Vec3 force = Vec3::Zero();
 };
 
+/// Room for the thread pulls of one sample (ThreadPull): one per body of the god-object.
+inline constexpr int kMaxThreadPulls = 16;
+
+/// A suture thread's pull on a body of the god-object, as the device loop applies it
+/// (docs/multirate-suturing.md, "A thread in the scene loop"): the threads' reactions on the body
+/// in the scene step (Data::thread_reactions: their ties' and contacts'), applied in each device
+/// period until the next sample as an explicit wrench (the device Data's Data::applied_wrench):
+/// lagged by up to one scene period, as a scene body's owed impulse is the other way.
+struct ThreadPull {
+  int body = -1;   ///< Its body in the god-object model.
+  Wrench wrench;   ///< N, N·m about its centre of mass; world.
+};
+
 /// The planes of one scene sample, [0, count) valid, their carriers, [0, carrier_count), the
-/// springs between node carriers, [0, link_count), and the needles' puncture ties,
-/// [0, tie_count); `dropped` counts contacts beyond the room.
+/// springs between node carriers, [0, link_count), the needles' puncture ties, [0, tie_count),
+/// and the threads' pulls, [0, pull_count); `dropped` counts contacts beyond the room.
 struct ContactPlaneSet {
   std::array<ContactPlane, kMaxContactPlanes> planes{};
   std::array<PlaneCarrier, kMaxPlaneCarriers> carriers{};
   std::array<CarrierLink, kMaxCarrierLinks> links{};
   std::array<PunctureTie, kMaxPunctureTies> ties{};
+  std::array<ThreadPull, kMaxThreadPulls> pulls{};
   int count = 0;
   int carrier_count = 0;
   int link_count = 0;
   int tie_count = 0;
+  int pull_count = 0;
   int dropped = 0;
 };
 
