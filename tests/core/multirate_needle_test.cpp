@@ -15,6 +15,7 @@
 
 #include "alloc_counter.hpp"
 #include "build_features.hpp"
+#include "sanitizer.hpp"
 #include "numen/core/data.hpp"
 #include "numen/core/model.hpp"
 #include "numen/core/multirate.hpp"
@@ -285,6 +286,8 @@ void print(const char* name, const ThreadedPass& p) {
 // at 10 kHz). No allocation.
 TEST(MultirateNeedle, TheThreadFollowsThroughTheEntryAsTheSingleRateStep) {
   NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_SKIP_UNDER_SANITIZER("three runs of 6.5 s (320 s under ASan) compare task figures, which is not what a "
+                             "sanitizer checks (TheThreadsPullReachesTheHandAsTheSingleRateStep runs the same path)");
   const core::Model m = numen::test::weighted_puncture_rig(0.02, 1e-4, 0.06);
   const ThreadedPass single = threaded_pass(m, 0);
   const ThreadedPass multi = threaded_pass(m, 10);
