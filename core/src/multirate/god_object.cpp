@@ -354,7 +354,7 @@ bool MultirateGodObject::take_scene_report(const MultirateSceneReport& m) noexce
 }
 
 void MultirateGodObject::apply_thread_pulls() noexcept {
-  if (slot_ < 0) return;
+  if (slot_ < 0 || free_scene_model_.threads.empty()) return;  // a run without a thread: nothing
   Data& d = slot().device;
   for (Wrench& w : d.applied_wrench) w = Wrench{};
   for (int i = 0; i < planes_.pull_count; ++i) {

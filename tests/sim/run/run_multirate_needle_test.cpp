@@ -7,10 +7,12 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <sstream>
 #include <string>
 
+#include "alloc_counter.hpp"
 #include "build_features.hpp"
 #include "sanitizer.hpp"
 #include "scene_text.hpp"
@@ -140,4 +142,32 @@ TEST(RunMultirateNeedle, TheThreadFollowsTheNeedleThroughTheFirstPassInTheSceneL
   };
   EXPECT_LT(distance_mm(m.passes[0].entry, m.entry_marks[0]), 1.0) << "the issue's 1 mm";
   EXPECT_LT(distance_mm(m.passes[0].exit, m.exit_marks[0]), 1.0) << "the issue's 1 mm";
+}
+
+// Zero allocations with the needle in the device loop and the thread in the scene loop: the
+// shipped scene with its thread, multirate, through its first pass (70 000 device periods, 7 000
+// scene periods: the grasp, the puncture, the hand-over, the tail drawn out of the entry and the
+// exit, the thread's pull handed over every sample).
+TEST(RunMultirateNeedle, PeriodWithTheNeedleAndTheThreadNeverAllocates) {
+  NUMEN_REQUIRE_DEFORMABLE();
+  NUMEN_REQUIRE_ARTICULATION();
+  NUMEN_SKIP_UNDER_SANITIZER("70 000 periods of the suturing scene are minutes under a sanitizer "
+                             "(MultirateNeedle.TheThreadsPullReachesTheHandAsTheSingleRateStep counts the core's)");
+  numen::test::TempDir dir;
+  const numen::sim::Scene scene = numen::sim::load_scene(dir.write("mr_thread.toml", suturing_at_ten_kilohertz(true, true)));
+  constexpr int kPeriods = 70000;
+  numen::sim::SceneRunner runner(scene, static_cast<std::size_t>(kPeriods));
+  std::int64_t count = -1;
+  {
+    numen::test::AllocationGuard guard;
+    for (int k = 0; k < kPeriods; ++k) runner.period();
+    count = guard.count();
+  }
+  EXPECT_EQ(count, 0) << "heap allocations in " << kPeriods << " multirate periods";
+  runner.finish();
+  const RunSummary s = runner.summary();
+  EXPECT_EQ(s.multirate.scene_steps, kPeriods / 10);
+  EXPECT_EQ(s.needle_passes, 1) << "the pass was not exercised";
+  EXPECT_EQ(s.thread_eyelets_taken, 2) << "the thread was not drawn through the pass";
+  EXPECT_FALSE(s.nan_detected);
 }
